@@ -1,0 +1,77 @@
+"""Input checks shared by the physics modules.
+
+Every public function validates its arguments with these helpers so that bad
+input raises a :class:`ValueError` whose message names the argument and the
+allowed range, instead of returning NaN or a silently wrong number.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "as_index",
+    "as_angle",
+    "as_positive",
+    "as_finite",
+    "broadcast",
+]
+
+
+def as_finite(value, name: str, *, dtype=float) -> np.ndarray:
+    """Return ``value`` as an array of ``dtype``; raise if any element is NaN or inf."""
+    try:
+        arr = np.asarray(value, dtype=dtype)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be numeric, got {value!r}") from exc
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite (no NaN or inf)")
+    return arr
+
+
+def as_index(eta, name: str = "eta") -> np.ndarray:
+    """Validate a complex index of refraction ``eta = n - 1j*kappa``.
+
+    Allowed: finite, ``n >= 0``, ``kappa >= 0`` (imaginary part <= 0) and
+    ``eta != 0``. A positive imaginary part is the other sign convention and is
+    rejected rather than conjugated silently.
+    """
+    arr = as_finite(eta, name, dtype=complex)
+    if np.any(arr.imag > 0):
+        raise ValueError(
+            f"{name} must have a non-positive imaginary part (eta = n - 1j*kappa, "
+            f"kappa >= 0); got a positive imaginary part. Conjugate it if your source "
+            f"uses the n + i*kappa convention."
+        )
+    if np.any(arr.real < 0):
+        raise ValueError(f"{name} must have a non-negative real part n >= 0")
+    if np.any(arr == 0):
+        raise ValueError(f"{name} must be non-zero")
+    return arr
+
+
+def as_angle(theta, name: str = "theta", lo: float = 0.0, hi: float = np.pi / 2) -> np.ndarray:
+    """Validate angles in radians within ``[lo, hi]``."""
+    arr = as_finite(theta, name)
+    if np.any(arr < lo) or np.any(arr > hi):
+        raise ValueError(f"{name} must be in [{lo:g}, {hi:g}] rad (angles are in radians)")
+    return arr
+
+
+def as_positive(value, name: str, *, allow_zero: bool = False) -> np.ndarray:
+    """Validate a strictly positive (or non-negative) finite real array."""
+    arr = as_finite(value, name)
+    bad = arr < 0 if allow_zero else arr <= 0
+    if np.any(bad):
+        rng = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name} must be {rng}")
+    return arr
+
+
+def broadcast(**arrays) -> list[np.ndarray]:
+    """Broadcast named arrays together; a shape mismatch names the arguments."""
+    try:
+        return list(np.broadcast_arrays(*arrays.values()))
+    except ValueError as exc:
+        shapes = ", ".join(f"{k}{np.shape(v)}" for k, v in arrays.items())
+        raise ValueError(f"shapes do not broadcast: {shapes}") from exc

@@ -1,0 +1,163 @@
+r"""Stokes vectors and the polarization quantities derived from them.
+
+Conventions: Stokes vectors have shape ``(..., 4)``; ``S0`` is the intensity,
+``S1 = I_s - I_p`` (s perpendicular to the plane of incidence), ``S2 = I_{+45} -
+I_{-45}`` and ``S3 = 2 Im(E_s^* E_p)``, the sign that makes the Jones-to-Mueller
+conversion of Eq. 133 and the worked example of Eq. 39 agree (see
+:mod:`scatterlab.polarization.jones`); ``(1, 0, 0, 1)`` is right circular as in Eq. 38.
+
+Undefined quantities: the degree of polarization and the angle of polarization
+of zero light (``S0 == 0``) are mathematically undefined and are returned as NaN
+(documented, never a crash); the angle of polarization of light with no linear
+part (``S1 = S2 = 0``) is returned as NaN too.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from scatterlab._checks import as_finite
+
+__all__ = [
+    "jones_to_stokes",
+    "stokes_vector",
+    "dop",
+    "dolp",
+    "aop",
+    "is_physical_stokes",
+]
+
+
+def _stokes(S) -> np.ndarray:
+    S = as_finite(S, "S")
+    if S.shape[-1:] != (4,):
+        raise ValueError(f"S must have shape (..., 4), got {S.shape}")
+    return S
+
+
+def jones_to_stokes(E) -> np.ndarray:
+    """Stokes vector of a fully polarized field with Jones vector ``E`` (Eq. 37, Eq. 133's sign of S3).
+
+    Parameters
+    ----------
+    E : array_like, shape ``(..., 2)``, complex (E_s, E_p).
+
+    Returns
+    -------
+    S : ndarray, shape ``(..., 4)``.
+    """
+    E = np.asarray(E, complex)
+    if E.shape[-1:] != (2,):
+        raise ValueError(f"E must have shape (..., 2), got {E.shape}")
+    es, ep = E[..., 0], E[..., 1]
+    x = np.conj(es) * ep
+    Is, Ip = np.abs(es) ** 2, np.abs(ep) ** 2
+    return np.stack([Is + Ip, Is - Ip, 2 * x.real, 2 * x.imag], -1)
+
+
+def stokes_vector(intensity=1.0, dop=0.0, aop=0.0, ellipticity=0.0) -> np.ndarray:
+    r"""Stokes vector from intensity, degree of polarization, angle of polarization and ellipticity angle.
+
+    :math:`S = I\,(1, p\cos2\chi\cos2\psi, p\cos2\chi\sin2\psi, p\sin2\chi)`.
+
+    Parameters
+    ----------
+    intensity : array_like, ``>= 0``
+    dop : array_like in ``[0, 1]``
+    aop : array_like [rad], from the s axis.
+    ellipticity : array_like [rad] in ``[-pi/4, pi/4]`` (positive: right-handed).
+
+    Returns
+    -------
+    S : ndarray, shape ``(..., 4)``.
+    """
+    I = as_finite(intensity, "intensity")
+    p = as_finite(dop, "dop")
+    psi = as_finite(aop, "aop")
+    chi = as_finite(ellipticity, "ellipticity")
+    if np.any(I < 0):
+        raise ValueError("intensity must be >= 0")
+    if np.any((p < 0) | (p > 1)):
+        raise ValueError("dop must be in [0, 1]")
+    if np.any(np.abs(chi) > np.pi / 4 + 1e-15):
+        raise ValueError("ellipticity must be in [-pi/4, pi/4] rad")
+    I, p, psi, chi = np.broadcast_arrays(I, p, psi, chi)
+    return np.stack([I, I * p * np.cos(2 * chi) * np.cos(2 * psi),
+                     I * p * np.cos(2 * chi) * np.sin(2 * psi), I * p * np.sin(2 * chi)], -1)
+
+
+def _ratio(num, den):
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+
+
+def dop(S) -> np.ndarray:
+    """Degree of polarization ``sqrt(S1^2 + S2^2 + S3^2) / S0`` (Eq. 40); NaN where ``S0 == 0``.
+
+    Parameters
+    ----------
+    S : array_like, shape ``(..., 4)``
+
+    Returns
+    -------
+    ndarray, shape ``(...)``; in [0, 1] for a physical Stokes vector.
+    """
+    S = _stokes(S)
+    return _ratio(np.sqrt(S[..., 1] ** 2 + S[..., 2] ** 2 + S[..., 3] ** 2), S[..., 0])
+
+
+def dolp(S) -> np.ndarray:
+    """Degree of linear polarization ``sqrt(S1^2 + S2^2) / S0``; NaN where ``S0 == 0``.
+
+    Parameters
+    ----------
+    S : array_like, shape ``(..., 4)`` (or ``(..., 3)``: the linear block).
+
+    Returns
+    -------
+    ndarray, shape ``(...)``.
+    """
+    S = as_finite(S, "S")
+    if S.shape[-1] not in (3, 4):
+        raise ValueError(f"S must have shape (..., 4) or (..., 3), got {S.shape}")
+    return _ratio(np.hypot(S[..., 1], S[..., 2]), S[..., 0])
+
+
+def aop(S) -> np.ndarray:
+    """Angle of polarization ``0.5 * arctan2(S2, S1)`` [rad] in ``(-pi/2, pi/2]`` (Eq. 41).
+
+    Measured from the s axis. NaN where there is no linear polarization
+    (``S1 = S2 = 0``, e.g. unpolarized or circular light) or no light.
+
+    Parameters
+    ----------
+    S : array_like, shape ``(..., 4)`` or ``(..., 3)``
+
+    Returns
+    -------
+    ndarray [rad], shape ``(...)``.
+    """
+    S = as_finite(S, "S")
+    if S.shape[-1] not in (3, 4):
+        raise ValueError(f"S must have shape (..., 4) or (..., 3), got {S.shape}")
+    s1, s2 = S[..., 1], S[..., 2]
+    a = 0.5 * np.arctan2(s2, s1)
+    a = np.where(a <= -np.pi / 2, a + np.pi, a)
+    return np.where((s1 == 0) & (s2 == 0), np.nan, a)
+
+
+def is_physical_stokes(S, atol: float = 1e-12) -> np.ndarray:
+    """True where ``S0 >= sqrt(S1^2 + S2^2 + S3^2)`` (within ``atol * S0``) and ``S0 >= 0``.
+
+    Parameters
+    ----------
+    S : array_like, shape ``(..., 4)``
+    atol : float, relative tolerance for rounding.
+
+    Returns
+    -------
+    ndarray of bool, shape ``(...)``.
+    """
+    S = _stokes(S)
+    pol = np.sqrt(S[..., 1] ** 2 + S[..., 2] ** 2 + S[..., 3] ** 2)
+    return (S[..., 0] >= 0) & (pol <= S[..., 0] * (1 + atol) + atol)

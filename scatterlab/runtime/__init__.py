@@ -1,0 +1,28 @@
+"""Runtime services: executors for sweeps, progress bars, atomic results I/O, timing, the study runner."""
+
+from scatterlab.runtime.executors import (
+    DaskExecutor,
+    Executor,
+    ProcessExecutor,
+    SerialExecutor,
+    TaskError,
+    chunks,
+    get_executor,
+)
+from scatterlab.runtime.progress import progress, progress_enabled
+from scatterlab.runtime.results import (
+    atomic_write_bytes,
+    read_json,
+    to_jsonable,
+    write_json,
+    write_npz,
+    write_text,
+)
+from scatterlab.runtime.timing import Stopwatch, best_time, throughput
+
+__all__ = [
+    "Executor", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "TaskError", "get_executor", "chunks",
+    "progress", "progress_enabled",
+    "atomic_write_bytes", "write_text", "write_json", "read_json", "write_npz", "to_jsonable",
+    "Stopwatch", "best_time", "throughput",
+]

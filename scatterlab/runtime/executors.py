@@ -1,0 +1,179 @@
+"""One executor interface for embarrassingly parallel sweeps.
+
+``get_executor(kind)`` returns an object with ``map(fn, tasks, desc=None)``
+that returns the results **in task order** and re-raises the first exception a
+task raised (with the task index in the message). Kinds:
+
+* ``"serial"`` (default): a plain loop in this process;
+* ``"processes"``: a local :class:`concurrent.futures.ProcessPoolExecutor`;
+* ``"dask"``: a Dask distributed client, connected to ``scheduler`` (an address
+  such as ``tcp://host:8786``) or, without one, to a local cluster started for
+  the purpose.
+
+``fn`` and the tasks must be picklable for the parallel kinds (module-level
+functions, plain data). Every map shows a progress bar when output is a terminal.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import os
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any
+
+from scatterlab.runtime.progress import progress
+
+__all__ = ["Executor", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "get_executor", "TaskError"]
+
+
+class TaskError(RuntimeError):
+    """A task of a sweep failed; ``index`` is its position in the task list."""
+
+    def __init__(self, index: int, exc: BaseException):
+        super().__init__(f"task {index} failed: {type(exc).__name__}: {exc}")
+        self.index = index
+
+
+class Executor:
+    """Base class: ``map(fn, tasks) -> list`` in task order."""
+
+    kind = "base"
+
+    def map(self, fn: Callable[[Any], Any], tasks: Iterable[Any], desc: str | None = None) -> list:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Release workers (no-op for serial)."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class SerialExecutor(Executor):
+    """Run tasks one after another in this process."""
+
+    kind = "serial"
+
+    def map(self, fn, tasks, desc=None):
+        tasks = list(tasks)
+        out = []
+        for i, t in enumerate(progress(tasks, desc=desc, total=len(tasks))):
+            try:
+                out.append(fn(t))
+            except Exception as exc:  # propagate with the task index
+                raise TaskError(i, exc) from exc
+        return out
+
+
+class ProcessExecutor(Executor):
+    """A local process pool with ``workers`` processes (default: CPU count)."""
+
+    kind = "processes"
+
+    def __init__(self, workers: int | None = None):
+        if workers is not None and workers < 1:
+            raise ValueError("workers must be >= 1")
+        self.workers = workers or os.cpu_count() or 1
+        self._pool = cf.ProcessPoolExecutor(max_workers=self.workers)
+
+    def map(self, fn, tasks, desc=None):
+        tasks = list(tasks)
+        futures = {self._pool.submit(fn, t): i for i, t in enumerate(tasks)}
+        out: list = [None] * len(tasks)
+        bar = progress(None, desc=desc, total=len(tasks))
+        try:
+            for fut in cf.as_completed(futures):
+                i = futures[fut]
+                exc = fut.exception()
+                if exc is not None:
+                    for f in futures:
+                        f.cancel()
+                    raise TaskError(i, exc) from exc
+                out[i] = fut.result()
+                bar.update(1)
+        finally:
+            bar.close()
+        return out
+
+    def close(self):
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+class DaskExecutor(Executor):
+    """A Dask distributed client (``pip install scatterlab[dask]``)."""
+
+    kind = "dask"
+
+    def __init__(self, scheduler: str | None = None, workers: int | None = None):
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError as exc:  # pragma: no cover - depends on the extra
+            raise ImportError("the dask executor needs `pip install scatterlab[dask]`") from exc
+        self._cluster = None
+        if scheduler:
+            self.client = Client(scheduler)
+        else:
+            self._cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1,
+                                         threads_per_worker=1, processes=True,
+                                         dashboard_address=None)
+            self.client = Client(self._cluster)
+
+    def map(self, fn, tasks, desc=None):
+        from dask.distributed import as_completed
+
+        tasks = list(tasks)
+        futures = self.client.map(fn, tasks, pure=False)
+        index = {f.key: i for i, f in enumerate(futures)}
+        out: list = [None] * len(tasks)
+        bar = progress(None, desc=desc, total=len(tasks))
+        try:
+            for fut in as_completed(futures):
+                i = index[fut.key]
+                if fut.status == "error":
+                    exc = fut.exception()
+                    self.client.cancel(futures)
+                    raise TaskError(i, exc) from exc
+                out[i] = fut.result()
+                bar.update(1)
+        finally:
+            bar.close()
+        return out
+
+    def close(self):
+        self.client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+
+
+def get_executor(kind: str = "serial", *, workers: int | None = None,
+                 scheduler: str | None = None) -> Executor:
+    """Executor of the given kind: ``"serial"``, ``"processes"`` or ``"dask"``.
+
+    A ``scheduler`` address implies ``"dask"``.
+    """
+    if scheduler:
+        kind = "dask"
+    if kind == "serial":
+        return SerialExecutor()
+    if kind == "processes":
+        return ProcessExecutor(workers)
+    if kind == "dask":
+        return DaskExecutor(scheduler, workers)
+    raise ValueError(f"kind must be 'serial', 'processes' or 'dask', got {kind!r}")
+
+
+def chunks(seq: Sequence, n: int) -> list[Sequence]:
+    """Split ``seq`` into ``n`` nearly equal consecutive chunks (for batching small tasks)."""
+    if n < 1:
+        raise ValueError("n must be >= 1")
+    k, r = divmod(len(seq), n)
+    out, start = [], 0
+    for i in range(n):
+        stop = start + k + (i < r)
+        if stop > start:
+            out.append(seq[start:stop])
+        start = stop
+    return out

@@ -1,0 +1,41 @@
+"""Every study runs in quick mode and writes its figures, metrics and report (the examples are tested)."""
+
+import json
+
+import pytest
+
+from scatterlab.runtime import studies
+
+ALL = studies.discover()
+
+
+@pytest.mark.parametrize("sid", list(ALL))
+def test_study_runs_in_quick_mode(sid, tmp_path):
+    report = studies.run_study(sid, tmp_path / sid, quick=True, seed=7)
+    assert report.exists()
+    text = report.read_text()
+    assert "## Findings" in text and "(no findings recorded)" not in text
+    m = json.loads((tmp_path / sid / "metrics.json").read_text())
+    assert m["seed"] == 7 and m["mode"] == "quick"
+    assert m["run_time_s"]["total"] > 0
+    assert "numpy" in m["versions"]
+    assert m["metrics"]
+    for name in m.get("figures", []):
+        assert (tmp_path / sid / f"{name}.png").exists()
+    pngs = list((tmp_path / sid).glob("*.png"))
+    assert pngs, "every study shows at least one figure"
+    for png in pngs:
+        if png.stem != "lobe_3d":
+            assert (tmp_path / sid / f"{png.stem}.pdf").exists()
+
+
+def test_study_refuses_to_overwrite(tmp_path):
+    studies.run_study("fig4", tmp_path, quick=True)
+    with pytest.raises(FileExistsError, match="--force"):
+        studies.run_study("fig4", tmp_path, quick=True)
+    studies.run_study("fig4", tmp_path, quick=True, force=True)
+
+
+def test_unknown_study():
+    with pytest.raises(ValueError, match="unknown study"):
+        studies.run_study("fig999", quick=True)
