@@ -81,9 +81,14 @@ class Beckmann(FacetDistribution):
         with np.errstate(divide="ignore"):
             a = np.where(t > 0, 1.0 / (np.sqrt(2.0) * self.sigma * np.where(t > 0, t, 1.0)), np.inf)
         big = a > 25  # Lambda < 1e-270: zero to double precision
-        grazing = a == 0  # theta = 90 deg: fully masked
+        grazing = a < 1e-150  # theta -> 90 deg: fully masked (and a^2 would underflow)
         a_s = np.where(big | grazing, 1.0, a)
-        lam = 0.5 * np.exp(-a_s * a_s) * (1.0 / (a_s * np.sqrt(np.pi)) - special.erfcx(a_s))
+        # 1/(a sqrt(pi)) - erfcx(a) cancels for large a: use its asymptotic series there (a >= 10: < 1e-12 rel.)
+        x = 1.0 / (2 * np.maximum(a_s, 10.0) ** 2)  # only used where a >= 10
+        series = x * (1 - 3 * x * (1 - 5 * x * (1 - 7 * x * (1 - 9 * x * (1 - 11 * x)))))
+        diff = np.where(a_s >= 10, series / (a_s * np.sqrt(np.pi)),
+                        1.0 / (a_s * np.sqrt(np.pi)) - special.erfcx(a_s))
+        lam = 0.5 * np.exp(-a_s * a_s) * diff
         return np.where(big, 0.0, np.where(grazing, np.inf, np.maximum(lam, 0.0)))
 
     @property
