@@ -59,7 +59,7 @@ class FacetGeometry:
     cos_theta_i, cos_theta_r : cosines of the incidence and observation angles.
     tan2_alpha : :math:`\\tan^2\\alpha`, squared facet slope (computed without cancellation).
     cos_alpha : facet tilt cosine.
-    cos_beta, beta : local angle of incidence on the facet [rad].
+    cos_beta : cosine of the local angle of incidence on the facet (``beta`` property [rad]).
     cos_gi, sin_gi, cos_gr, sin_gr : rotation cosines and sines of Eq. 169.
     """
 
@@ -68,11 +68,15 @@ class FacetGeometry:
     tan2_alpha: np.ndarray
     cos_alpha: np.ndarray
     cos_beta: np.ndarray
-    beta: np.ndarray
     cos_gi: np.ndarray
     sin_gi: np.ndarray
     cos_gr: np.ndarray
     sin_gr: np.ndarray
+
+    @property
+    def beta(self) -> np.ndarray:
+        """Local angle of incidence on the facet [rad]."""
+        return np.arccos(self.cos_beta)
 
     @property
     def gamma_i(self) -> np.ndarray:
@@ -132,10 +136,9 @@ def facet_geometry(theta_i, theta_r, phi, *, rotations: bool = True, checked: bo
     cos_beta = np.sqrt(norm2) / 2
     cos_beta = np.minimum(cos_beta, 1.0)
     cos_alpha = np.where(norm2 > 0, hz / np.sqrt(np.where(norm2 > 0, norm2, 1.0)), 0.0)
-    beta = np.arccos(cos_beta)
     if not rotations:
         z = np.zeros_like(cos_beta)
-        return FacetGeometry(ci, cr, tan2_alpha, cos_alpha, cos_beta, beta, z + 1, z, z + 1, z)
+        return FacetGeometry(ci, cr, tan2_alpha, cos_alpha, cos_beta, z + 1, z, z + 1, z)
     # facet s axis: (s_i x s_r)/|.|
     mx = -ci * sr * sp
     my = ci * sr * cp - si * cr
@@ -151,4 +154,4 @@ def facet_geometry(theta_i, theta_r, phi, *, rotations: bool = True, checked: bo
     sin_gi = -ci * mx + si * mz
     cos_gr = -sp * mx + cp * my
     sin_gr = -cr * cp * mx - cr * sp * my + sr * mz
-    return FacetGeometry(ci, cr, tan2_alpha, cos_alpha, cos_beta, beta, cos_gi, sin_gi, cos_gr, sin_gr)
+    return FacetGeometry(ci, cr, tan2_alpha, cos_alpha, cos_beta, cos_gi, sin_gi, cos_gr, sin_gr)

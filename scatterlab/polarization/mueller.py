@@ -27,6 +27,7 @@ from scatterlab.polarization import jones as _jones
 
 __all__ = [
     "jones_to_mueller",
+    "mueller_from_jones_elements",
     "apply",
     "rotate_mueller",
     "linear_polarizer",
@@ -70,28 +71,27 @@ def jones_to_mueller(J) -> np.ndarray:
     if J.shape[-2:] != (2, 2):
         raise ValueError(f"J must have shape (..., 2, 2), got {J.shape}")
     J = J.astype(complex, copy=False)
-    a, b, c, d = J[..., 0, 0], J[..., 0, 1], J[..., 1, 0], J[..., 1, 1]
-    aa, bb, cc, dd = (np.abs(x) ** 2 for x in (a, b, c, d))
+    return mueller_from_jones_elements(J[..., 0, 0], J[..., 0, 1], J[..., 1, 0], J[..., 1, 1])
+
+
+def mueller_from_jones_elements(a, b, c, d) -> np.ndarray:
+    """Eq. 133 from the Jones elements ``a = T_ss, b = T_ps, c = T_sp, d = T_pp`` given as separate arrays.
+
+    Same result as :func:`jones_to_mueller`; avoids building the ``(..., 2, 2)`` array, and writes the
+    output contiguously. Returns shape ``(..., 4, 4)``.
+    """
+    aa, bb, cc, dd = (x.real * x.real + x.imag * x.imag for x in (a, b, c, d))
     ab, cd, ac, bd, ad, bc = (a * b.conj(), c * d.conj(), a * c.conj(), b * d.conj(),
                               a * d.conj(), b * c.conj())
-    M = np.empty(J.shape[:-2] + (4, 4))
-    M[..., 0, 0] = 0.5 * (aa + bb + cc + dd)
-    M[..., 0, 1] = 0.5 * (aa + cc - bb - dd)
-    M[..., 0, 2] = ab.real + cd.real
-    M[..., 0, 3] = ab.imag + cd.imag
-    M[..., 1, 0] = 0.5 * (aa + bb - cc - dd)
-    M[..., 1, 1] = 0.5 * (aa - cc - bb + dd)
-    M[..., 1, 2] = ab.real - cd.real
-    M[..., 1, 3] = ab.imag - cd.imag
-    M[..., 2, 0] = ac.real + bd.real
-    M[..., 2, 1] = ac.real - bd.real
-    M[..., 2, 2] = ad.real + bc.real
-    M[..., 2, 3] = ad.imag - bc.imag
-    M[..., 3, 0] = -ac.imag - bd.imag
-    M[..., 3, 1] = -ac.imag + bd.imag
-    M[..., 3, 2] = -ad.imag - bc.imag
-    M[..., 3, 3] = ad.real - bc.real
-    return M
+    s_ab, d_ab = aa + bb, aa - bb
+    s_cd, d_cd = cc + dd, cc - dd
+    M = np.stack([
+        0.5 * (s_ab + s_cd), 0.5 * (d_ab + d_cd), ab.real + cd.real, ab.imag + cd.imag,
+        0.5 * (s_ab - s_cd), 0.5 * (d_ab - d_cd), ab.real - cd.real, ab.imag - cd.imag,
+        ac.real + bd.real, ac.real - bd.real, ad.real + bc.real, ad.imag - bc.imag,
+        -ac.imag - bd.imag, bd.imag - ac.imag, -ad.imag - bc.imag, ad.real - bc.real,
+    ], axis=-1)
+    return M.reshape(M.shape[:-1] + (4, 4))
 
 
 def apply(M, S) -> np.ndarray:

@@ -1,0 +1,66 @@
+"""Plotting helpers (matplotlib and pyvista are imported lazily, inside the functions).
+
+Nothing in the physics imports this package.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["polar_contour", "pbrdf_lobe_png"]
+
+
+def polar_contour(theta_r, phi, values, *, ax=None, fig=None, levels=20, cmap="viridis", label=None,
+                  vmin=None, vmax=None):
+    """Filled contour of ``values(theta_r, phi)`` on a polar axis (radius theta_r in degrees).
+
+    Parameters
+    ----------
+    theta_r, phi : 1-D arrays [rad] (grid axes)
+    values : array, shape ``(theta_r.size, phi.size)``
+    ax, fig : matplotlib axes (polar) and figure, created when omitted.
+
+    Returns
+    -------
+    fig, ax
+    """
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        fig, ax = plt.subplots(subplot_kw={"projection": "polar"}, figsize=(4.2, 4))
+    P, T = np.meshgrid(phi, np.degrees(theta_r))
+    cs = ax.contourf(P, T, values, levels=levels, cmap=cmap, vmin=vmin, vmax=vmax)
+    ax.set_rlim(0, 90)
+    ax.set_rticks([30, 60, 90])
+    if fig is not None:
+        fig.colorbar(cs, ax=ax, shrink=0.75, label=label)
+    return fig, ax
+
+
+def pbrdf_lobe_png(model, eta, theta_i, path, *, n_theta=90, n_phi=180, window_size=(700, 560), title=None):
+    """Render the pBRDF lobe ``F00(theta_r, phi)`` as a 3-D surface coloured by DOLP and save a PNG.
+
+    The surface point in direction ``(theta_r, phi)`` sits at radius ``F00 / max F00``. Off-screen
+    pyvista rendering; returns the path.
+    """
+    import pyvista as pv
+
+    tr = np.linspace(0, np.radians(89.5), n_theta)
+    ph = np.linspace(0, 2 * np.pi, n_phi)
+    TR, PH = np.meshgrid(tr, ph, indexing="ij")
+    F = model.mueller_linear(eta, np.full_like(TR, theta_i), TR, PH)
+    f00 = F[..., 0, 0]
+    dolp = np.clip(np.hypot(F[..., 1, 0], F[..., 2, 0]) / np.maximum(f00, 1e-300), 0, 1)
+    r = f00 / f00.max()
+    x, y, z = r * np.sin(TR) * np.cos(PH), r * np.sin(TR) * np.sin(PH), r * np.cos(TR)
+    grid = pv.StructuredGrid(x, y, z)
+    grid["DOLP"] = dolp.ravel(order="F")
+    pl = pv.Plotter(off_screen=True, window_size=window_size)
+    pl.add_mesh(grid, scalars="DOLP", cmap="viridis", clim=(0, 1), smooth_shading=True)
+    pl.add_mesh(pv.Disc(inner=0, outer=1.05, c_res=60), color="lightgrey", opacity=0.3)
+    if title:
+        pl.add_text(title, font_size=10)
+    pl.camera_position = [(2.2, -2.6, 1.8), (0, 0, 0.25), (0, 0, 1)]
+    pl.screenshot(str(path))
+    pl.close()
+    return path
