@@ -47,6 +47,7 @@ import functools
 import numpy as np
 
 from scatterlab._checks import as_index, broadcast
+from scatterlab.fresnel import _refraction_term
 from scatterlab.pbrdf import dhr as _dhr
 from scatterlab.pbrdf.distributions import Beckmann, FacetDistribution
 from scatterlab.pbrdf.geometry import check_angles, facet_geometry
@@ -70,13 +71,7 @@ def _reduced_fresnel(eta, cos_beta):
     c = cos_beta
     cos2 = c * c
     s2 = 1 - cos2
-    n, kappa = eta.real, -eta.imag
-    d = (n - 1) * (n + 1) - kappa * kappa + cos2
-    nk = n * kappa
-    w = np.hypot(d, 2 * nk)
-    big = np.sqrt((w + np.abs(d)) / 2)
-    small = np.divide(nk, big, out=np.zeros_like(big), where=big > 0)
-    u = np.where(d >= 0, big, small) - 1j * np.where(d >= 0, small, big)
+    u = _refraction_term(eta, cos2)
     eta2 = eta * eta
     rs_red = 1.0 / (c + u) ** 2
     rp_red = -(eta2 * cos2 - s2) / (eta2 * c + u) ** 2
