@@ -43,6 +43,10 @@ class FacetDistribution:
         tan2 = np.asarray(tan2, float)
         return self.slope_pdf(tan2) * (1 + tan2) ** 1.5
 
+    def radial_quantile(self, w: np.ndarray) -> np.ndarray:
+        """Slope magnitude r with P(|s| > r) = w, w in (0, 1] (maps the radial distribution to uniform)."""
+        raise NotImplementedError
+
     def smith_lambda(self, tan_theta: np.ndarray) -> np.ndarray:
         raise ValueError(f"Smith shadowing has no closed form for {type(self).__name__}; "
                          "shadowing must be 'torrance-sparrow' or 'none' for it")
@@ -70,6 +74,9 @@ class Beckmann(FacetDistribution):
         sigma_h = float(as_positive(sigma_h, "sigma_h"))
         corr_length = float(as_positive(corr_length, "corr_length"))
         return cls(np.sqrt(2.0) * sigma_h / corr_length)
+
+    def radial_quantile(self, w):
+        return self.sigma * np.sqrt(-2 * np.log(w))
 
     def slope_pdf(self, tan2):
         s2 = self.sigma**2
@@ -107,6 +114,9 @@ class HyperCauchy(FacetDistribution):
         as_positive(self.b, "b")
         if not self.nu > 1:
             raise ValueError("nu must be > 1 (normalisable distribution)")
+
+    def radial_quantile(self, w):
+        return self.b * np.sqrt(np.expm1(-np.log(w) / (self.nu - 1)))
 
     def slope_pdf(self, tan2):
         b2 = self.b**2

@@ -203,3 +203,27 @@ def test_array_sigma_broadcasts():
 def test_bad_input(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_smith_dhr_quadrature_equals_independent_hemisphere_integral(hemisphere_integral):
+    m = Model(0.3, shadowing="smith", diffuse="none")
+    ti = np.radians(50)
+    spec = hemisphere_integral(lambda tr, ph: m.mueller(PEC, np.full_like(tr, ti), tr, ph)[..., 0, 0])
+    assert m.dhr_pec(ti) == pytest.approx(spec, abs=1e-6)
+    assert m.dhr_pec(ti) <= 1
+
+
+def test_generalised_cauchy_distribution_in_the_model():
+    """The distribution interface is real: a HyperCauchy model evaluates, its DHR (adaptive cubature)
+    is <= 1 with shadowing, and for large nu with b^2 = 2 nu sigma^2 it tends to the Beckmann model."""
+    from scatterlab.pbrdf import HyperCauchy
+
+    sigma, nu = 0.3, 400.0
+    hc = Model(distribution=HyperCauchy(np.sqrt(2 * nu) * sigma, nu), diffuse="none")
+    bk = Model(sigma, diffuse="none")
+    ti, tr = np.radians(40), np.radians([20, 40, 60])
+    np.testing.assert_allclose(hc.mueller(ETA, ti, tr, np.pi), bk.mueller(ETA, ti, tr, np.pi), rtol=0.02)
+    cauchy = Model(distribution=HyperCauchy(0.3, 2.0))
+    rho = cauchy.dhr_pec(np.radians(30))
+    assert 0 < rho <= 1
+    assert np.all(np.isfinite(cauchy.dolp(ETA, ti, tr, 1.0)))
