@@ -1,0 +1,191 @@
+r"""Mueller-matrix ellipsometer: polarization state generator (PSG), analyzer (PSA) and measurement.
+
+A measurement with 4 generated and 4 analysed states is the 4x4 intensity matrix
+
+.. math::  \mathbf B = \mathbf A\,\mathbf M\,\mathbf W ,
+
+where the columns of ``W`` are the Stokes vectors leaving the PSG and the rows of ``A`` are the
+analysis vectors of the PSA (the first row of the PSA's Mueller chain, the detector measuring
+:math:`S_0`). The sample Mueller matrix is then :math:`\mathbf M = \mathbf A^{-1}\mathbf B\mathbf W^{-1}`
+(Eq. 184). Designs:
+
+* :func:`switched_wave_plate_psg` -- the reference's 1064 nm instrument (Sec. 4.4): a polarizing beam
+  splitter (horizontal polarizer) followed by two half-wave plates and a quarter-wave plate moved in
+  and out of the beam; the four configurations used here are nothing, HWP at 45 deg (V), HWP at 22.5 deg
+  (+45) and QWP at 45 deg (circular). The PSA is its mirror image.
+* :func:`rotating_retarder_psg` -- a polarizer followed by a retarder at four azimuths.
+* :func:`tetrahedral_psg` -- the optimal design: states at the vertices of a regular tetrahedron on
+  the Poincare sphere (condition number sqrt(3), the minimum for 4 states).
+
+Every element may be imperfect: retardance and azimuth errors, polarizer extinction ratio. Angles in
+radians; matrices ``(4, 4)``; intensities in arbitrary units.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from scatterlab._checks import as_finite
+from scatterlab.polarization import linear_polarizer, linear_retarder
+
+__all__ = ["Errors", "switched_wave_plate_psg", "switched_wave_plate_psa", "rotating_retarder_psg",
+           "rotating_retarder_psa", "tetrahedral_psg", "tetrahedral_psa", "psa_from_psg", "Instrument",
+           "condition_number"]
+
+
+@dataclass(frozen=True)
+class Errors:
+    """Imperfections of one arm (all angles in radians).
+
+    Attributes
+    ----------
+    retardance : float or sequence
+        Retardance error added to every wave plate (or one per configuration).
+    azimuth : float or sequence
+        Azimuth error of every wave plate (or one per configuration).
+    polarizer_azimuth : float
+        Azimuth error of the arm's polarizer.
+    extinction_ratio : float
+        Extinction ratio of the arm's polarizer (0 = ideal).
+    """
+
+    retardance: float | tuple = 0.0
+    azimuth: float | tuple = 0.0
+    polarizer_azimuth: float = 0.0
+    extinction_ratio: float = 0.0
+
+    def per_state(self, value, k):
+        return value[k] if np.ndim(value) else value
+
+
+def _column(M):
+    return M[:, 0]
+
+
+def switched_wave_plate_psg(errors: Errors = Errors()) -> np.ndarray:
+    """W of the reference's switched wave-plate PSG (columns: H, V, +45, circular), shape (4, 4)."""
+    P = linear_polarizer(errors.polarizer_azimuth, errors.extinction_ratio)
+    plates = [None, (np.pi, np.pi / 4), (np.pi, np.pi / 8), (np.pi / 2, np.pi / 4)]
+    cols = []
+    for k, plate in enumerate(plates):
+        M = P
+        if plate is not None:
+            ret = plate[0] + errors.per_state(errors.retardance, k)
+            az = plate[1] + errors.per_state(errors.azimuth, k)
+            M = linear_retarder(ret, az) @ P
+        cols.append(M @ np.array([1.0, 0, 0, 0]) * 2)  # unit-intensity source before the polarizer: S0 = 1
+    return np.stack(cols, axis=1)
+
+
+def psa_from_psg(psg_chain_matrices) -> np.ndarray:
+    """A from the analyser chains: row k is the first row of chain k (the detector reads S0)."""
+    return np.stack([M[0] for M in psg_chain_matrices], axis=0)
+
+
+def switched_wave_plate_psa(errors: Errors = Errors()) -> np.ndarray:
+    """A of the mirror-image PSA (wave plates, then a horizontal polarizer, then the detector), shape (4, 4)."""
+    P = linear_polarizer(errors.polarizer_azimuth, errors.extinction_ratio)
+    plates = [None, (np.pi, np.pi / 4), (np.pi, np.pi / 8), (np.pi / 2, np.pi / 4)]
+    rows = []
+    for k, plate in enumerate(plates):
+        M = P
+        if plate is not None:
+            ret = plate[0] + errors.per_state(errors.retardance, k)
+            az = plate[1] + errors.per_state(errors.azimuth, k)
+            M = P @ linear_retarder(ret, az)
+        rows.append(2 * M[0])
+    return np.stack(rows, axis=0)
+
+
+_RR_ANGLES = np.radians([-51.7, -15.1, 15.1, 51.7])  # a common near-optimal rotating-retarder set
+
+
+def rotating_retarder_psg(angles=_RR_ANGLES, retardance: float = np.radians(132), errors: Errors = Errors()):
+    """W of a polarizer followed by a retarder at ``angles`` (defaults: a near-optimal 132 deg design)."""
+    angles = as_finite(angles, "angles")
+    P = linear_polarizer(errors.polarizer_azimuth, errors.extinction_ratio)
+    cols = [2 * (linear_retarder(retardance + errors.per_state(errors.retardance, k),
+                                 a + errors.per_state(errors.azimuth, k)) @ P)[:, 0] for k, a in enumerate(angles)]
+    return np.stack(cols, axis=1)
+
+
+def rotating_retarder_psa(angles=_RR_ANGLES, retardance: float = np.radians(132), errors: Errors = Errors()):
+    """A of a retarder at ``angles`` followed by a polarizer (the mirror of :func:`rotating_retarder_psg`)."""
+    angles = as_finite(angles, "angles")
+    P = linear_polarizer(errors.polarizer_azimuth, errors.extinction_ratio)
+    rows = [2 * (P @ linear_retarder(retardance + errors.per_state(errors.retardance, k),
+                                     a + errors.per_state(errors.azimuth, k)))[0] for k, a in enumerate(angles)]
+    return np.stack(rows, axis=0)
+
+
+def tetrahedral_psg() -> np.ndarray:
+    """W with fully polarized unit states at the vertices of a regular tetrahedron on the Poincare sphere."""
+    v = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]) / np.sqrt(3)
+    return np.vstack([np.ones(4), v.T])
+
+
+def tetrahedral_psa() -> np.ndarray:
+    """A with analysis vectors at the tetrahedron vertices (transpose of :func:`tetrahedral_psg`)."""
+    return tetrahedral_psg().T
+
+
+def condition_number(X) -> float:
+    """2-norm condition number of a 4x4 PSG or PSA matrix (sqrt(3) is optimal for 4 states)."""
+    return float(np.linalg.cond(np.asarray(X, float)))
+
+
+@dataclass
+class Instrument:
+    """A Mueller ellipsometer with PSG matrix ``W`` and PSA matrix ``A`` (4x4 each).
+
+    ``measure(M, rng, noise=..., repeats=...)`` returns the mean intensity matrix over ``repeats``
+    measurements and its standard deviation; detector noise is Gaussian with standard deviation
+    ``noise`` times each noiseless intensity (``relative_to="each"``, the default: relative noise of
+    every reading) or times the largest intensity of the 4x4 measurement (``relative_to="max"``: a
+    constant noise floor), plus an optional absolute floor ``noise_floor``.
+    """
+
+    W: np.ndarray
+    A: np.ndarray
+    name: str = "instrument"
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for nm in ("W", "A"):
+            X = np.asarray(getattr(self, nm), float)
+            if X.shape != (4, 4) or not np.all(np.isfinite(X)):
+                raise ValueError(f"{nm} must be a finite 4x4 matrix")
+            setattr(self, nm, X)
+
+    @property
+    def condition_numbers(self) -> tuple[float, float]:
+        """(cond W, cond A)."""
+        return condition_number(self.W), condition_number(self.A)
+
+    def intensities(self, M) -> np.ndarray:
+        """Noise-free ``B = A M W`` for Mueller matrices ``(..., 4, 4)``."""
+        return self.A @ np.asarray(M, float) @ self.W
+
+    def measure(self, M, rng=None, *, noise: float = 0.0, noise_floor: float = 0.0, repeats: int = 1,
+                relative_to: str = "each"):
+        """Mean and standard deviation of ``repeats`` noisy measurements of ``M`` ``(..., 4, 4)``.
+
+        Returns
+        -------
+        B_mean, B_std : ndarray ``(..., 4, 4)`` (std is zero for one repeat).
+        """
+        if repeats < 1:
+            raise ValueError("repeats must be >= 1")
+        if noise < 0 or noise_floor < 0:
+            raise ValueError("noise and noise_floor must be >= 0")
+        if relative_to not in ("each", "max"):
+            raise ValueError("relative_to must be 'each' or 'max'")
+        rng = np.random.default_rng(rng)
+        B = self.intensities(M)
+        ref = np.abs(B) if relative_to == "each" else np.max(np.abs(B), axis=(-2, -1), keepdims=True)
+        scale = noise * ref + noise_floor
+        draws = B + scale * rng.standard_normal((repeats,) + B.shape)
+        std = draws.std(axis=0, ddof=1) if repeats > 1 else np.zeros_like(B)
+        return draws.mean(axis=0), std

@@ -1,0 +1,37 @@
+import numpy as np
+import pytest
+
+from scatterlab.ellipsometry import fit_mueller_elements, normalised_elements
+from scatterlab.ellipsometry.fit import model_elements
+from scatterlab.pbrdf import Model
+
+THETA = np.radians(np.arange(10, 81, 10))
+
+
+@pytest.mark.parametrize("eta, sigma", [(0.285 - 7.3523j, 0.44), (1.226 - 10.413j, 0.43), (3.6 - 5.88j, 0.2)])
+def test_noise_free_fit_recovers_eta_and_sigma(eta, sigma):
+    y = normalised_elements(Model(sigma).mueller(eta, THETA, THETA, np.pi))
+    fit = fit_mueller_elements(THETA, y)
+    assert fit.n == pytest.approx(eta.real, abs=1e-6)
+    assert fit.kappa == pytest.approx(-eta.imag, abs=1e-6)
+    assert fit.sigma == pytest.approx(sigma, abs=1e-6)
+    assert fit.eta == pytest.approx(eta, abs=1e-6)
+
+
+def test_known_sigma_and_covariance_scaling():
+    eta, sigma = 0.285 - 7.3523j, 0.44
+    y = model_elements(THETA, eta.real, -eta.imag, sigma)
+    rng = np.random.default_rng(0)
+    std = np.full_like(y, 2e-3)
+    fit = fit_mueller_elements(THETA, y + std * rng.standard_normal(y.shape), std=std, sigma=sigma, fit_sigma=False)
+    assert fit.sigma == sigma
+    assert abs(fit.n - eta.real) < 5 * fit.errors[0] and abs(fit.kappa + eta.imag) < 5 * fit.errors[1]
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="measured"):
+        fit_mueller_elements(THETA, np.zeros((3, 4)))
+    with pytest.raises(ValueError, match="sigma"):
+        fit_mueller_elements(THETA, np.zeros((THETA.size, 4)), fit_sigma=False)
+    with pytest.raises(ValueError, match="theta"):
+        fit_mueller_elements(THETA + 2, np.zeros((THETA.size, 4)))
