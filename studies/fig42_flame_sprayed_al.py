@@ -1,0 +1,15 @@
+"""Fig. 42: Mueller elements of flame-sprayed aluminium (1.226 - j10.413, roughness 0.43) at 1.064 um,
+synthetic measurements through an ECM-calibrated imperfect ellipsometer, against the pBRDF; best-fit index."""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _common import mueller_figure_study  # noqa: E402
+
+STUDY = {"id": "fig42", "title": "Mueller elements of flame-sprayed aluminium: synthetic ECM measurement and fit",
+         "reproduces": "Fig. 42 (Sec. 4.4)"}
+
+
+def run(ctx):
+    mueller_figure_study(ctx, 1.226 - 10.413j, 0.43, "fig42", "0.8886 - j3.4602", "flame-sprayed aluminium")
