@@ -1,0 +1,99 @@
+"""Turbulence: spectra and screens against independent truths (closed forms, quadrature of the spectrum).
+
+Kolmogorov screens with Lane's subharmonics are 14-35 % short of 6.88 (r/r0)^(5/3) and are not yet held to
+the 5 % of issue 7 (open); what is validated here is asserted with its tolerance."""
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy import special
+
+from scatterlab.imaging import turbulence as T
+
+
+def test_structure_constant_and_spectrum_constant():
+    assert T.STRUCTURE_CONSTANT == pytest.approx(6.88, abs=0.005)
+    assert T.PSD_CONSTANT == pytest.approx(0.0229, abs=1e-4)  # Eq. 79
+    r = np.array([1e-3, 0.05, 0.3, 3.0])
+    np.testing.assert_allclose(T.structure_function_theory(r, 0.1), T.STRUCTURE_CONSTANT * (r / 0.1) ** (5 / 3),
+                               rtol=1e-5)
+
+
+def test_von_karman_variance_closed_form():
+    """2 pi int 0.0229 r0^-5/3 (f^2 + f0^2)^-11/6 f df = 0.0229 pi (6/5) (L0/r0)^(5/3)."""
+    for L0 in (0.5, 2.0, 20.0):
+        closed = T.PSD_CONSTANT * np.pi * 6 / 5 * (L0 / 0.1) ** (5 / 3)
+        assert T.phase_variance_theory(0.1, L0) == pytest.approx(closed, rel=1e-8)
+    with pytest.raises(ValueError, match="infinite"):
+        T.phase_variance_theory(0.1, np.inf)
+
+
+def test_von_karman_screens_match_theory_within_5_percent():
+    """L0 = 1 m on a 2.56 m screen: structure function (2 px to D/2) and variance within 5 % of the
+    quadrature of the spectrum; 150 screens give ~2 % statistical error at D/2."""
+    rng = np.random.default_rng(7)
+    n, dx, r0, L0 = 256, 0.01, 0.1, 1.0
+    screens = np.stack([T.phase_screen(n, dx, r0, rng, L0=L0) for _ in range(150)])
+    r, D = T.structure_function(screens, n // 2)
+    theory = T.structure_function_theory(r[1:] * dx, r0, L0)
+    np.testing.assert_allclose(D[1:], theory, rtol=0.05)
+    assert np.var(screens) == pytest.approx(T.phase_variance_theory(r0, L0), rel=0.05)
+
+
+def test_subharmonics_reduce_the_low_frequency_deficit():
+    rng = np.random.default_rng(8)
+    n, dx, r0 = 128, 0.01, 0.1
+    ratio = {}
+    for sh in (False, True):
+        s = np.stack([T.phase_screen(n, dx, r0, rng, subharmonics=sh) for _ in range(200)])
+        r, D = T.structure_function(s, n // 2)
+        ratio[sh] = D[-1] / (T.STRUCTURE_CONSTANT * (r[-1] * dx / r0) ** (5 / 3))
+    assert ratio[False] < 0.45 < ratio[True]  # at D/2: about 0.33 without and 0.63 with subharmonics
+
+
+def test_fried_parameter_and_rytov_variance():
+    lam, L, cn2 = 1.55e-6, 2000.0, 1e-15
+    k = 2 * np.pi / lam
+    r0 = T.fried_parameter(cn2, L, lam)
+    assert r0 == pytest.approx((0.423 * k**2 * cn2 * L) ** (-3 / 5))  # Eq. 75
+    assert T.fried_parameter(lambda z: cn2, L, lam) == pytest.approx(r0, rel=1e-10)  # Eq. 74, profile
+    # Eq. 80 for constant Cn2 (1.23 Cn2 k^7/6 L^11/6) and Eq. 81 from r0 are the same number
+    s2 = T.rytov_variance(cn2, L, lam)
+    assert s2 == pytest.approx(1.2272727 * cn2 * k ** (7 / 6) * L ** (11 / 6), rel=1e-6)
+    # Eq. 81's 2.91 is 1.2273 / 0.423 = 2.9014 rounded: the two agree to 0.3 %
+    assert T.rytov_variance_from_r0(r0, L, lam) == pytest.approx(s2 * 2.91 / (1.2272727 / 0.423), rel=1e-6)
+    with pytest.warns(RuntimeWarning, match="Rytov"):
+        T.rytov_variance(1e-13, 5000.0, 0.5e-6)
+
+
+def test_reproducible_and_sliding_screen():
+    a = T.phase_screen(64, 0.01, 0.1, rng=3)
+    b = T.phase_screen(64, 0.01, 0.1, rng=np.random.default_rng(3))
+    np.testing.assert_array_equal(a, b)
+    wheel = T.SlidingScreen(32, 0.01, 0.1, rng=4, length=128)
+    np.testing.assert_allclose(wheel.window(6)[:, :-1], wheel.window(5)[:, 1:], atol=1e-12)  # frozen flow
+    np.testing.assert_allclose(wheel.window(130), wheel.window(2), atol=1e-12)  # periodic wheel
+    np.testing.assert_allclose(wheel.window(5.0), wheel.window(5.5 - 0.5), atol=1e-12)
+    half = wheel.window(5.5)
+    assert np.all(np.isfinite(half)) and half.shape == (32, 32)
+
+
+def test_piston_tilt_removal():
+    y, x = np.mgrid[0:16, 0:16]
+    plane = 0.3 + 0.1 * x - 0.05 * y
+    bump = np.exp(-((x - 8) ** 2 + (y - 8) ** 2) / 8.0)
+    out = T.remove_piston_tilt(plane + bump)
+    expected = T.remove_piston_tilt(bump)
+    np.testing.assert_allclose(out, expected, atol=1e-12)
+    np.testing.assert_allclose(T.remove_piston_tilt(plane), 0, atol=1e-12)
+
+
+@pytest.mark.parametrize("kw, match", [({"r0": 0.0}, "r0"), ({"r0": -1.0}, "r0"), ({"n": 2}, "n"),
+                                       ({"dx": 0.0}, "dx"), ({"L0": -1.0}, "L0")])
+def test_bad_input(kw, match):
+    args = {"n": 32, "dx": 0.01, "r0": 0.1}
+    args.update(kw)
+    L0 = args.pop("L0", np.inf)
+    with pytest.raises(ValueError, match=match):
+        T.phase_screen(args["n"], args["dx"], args["r0"], rng=0, L0=L0)
