@@ -1,0 +1,69 @@
+"""Phase screens: subharmonic levels and screen size vs structure-function error vs time, and speed against
+AOtools' ft_sh_phase_screen at 256 and 512 pixels (same run)."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parents[1]))
+from _common import plt  # noqa: E402
+
+from scatterlab.imaging import turbulence as T  # noqa: E402
+from scatterlab.runtime import best_time  # noqa: E402
+
+STUDY = {"id": "perf_phase_screens", "title": "Phase screens: accuracy vs time; speed vs AOtools",
+         "reproduces": "own performance study (issue 7, items 6 and 8)"}
+
+
+def run(ctx):
+    dx, r0 = 0.01, 0.1
+    count = 200 if ctx.quick else 1500
+    rows = []
+    pyplot = plt()
+    fig, ax = pyplot.subplots(figsize=(6, 4))
+    with ctx.step("levels"):
+        for levels in (0, 1, 3, 5):
+            old = T.SUBHARMONIC_LEVELS
+            T.SUBHARMONIC_LEVELS = max(levels, 1)
+            try:
+                n = 64
+                kw = {"subharmonics": levels > 0}
+                T.phase_screen(n, dx, r0, 0, **kw)  # build the cached weights outside the timing
+                t = best_time(lambda: T.phase_screen(n, dx, r0, ctx.rng, **kw), repeat=5)
+                s = np.stack([T.phase_screen(n, dx, r0, ctx.rng, **kw) for _ in range(count)])
+                r, D = T.structure_function(s, n // 2)
+                err = float(np.max(np.abs(D[1:] / (T.STRUCTURE_CONSTANT * (r[1:] * dx / r0) ** (5 / 3)) - 1)))
+            finally:
+                T.SUBHARMONIC_LEVELS = old
+            rows.append({"levels": levels, "max_rel_error_2px_to_half": err, "time_s": t})
+            ax.loglog(t, err, "o")
+            ax.annotate(f"{levels} levels", (t, err), fontsize=7)
+    ax.set(xlabel="time per 64 px screen [s]", ylabel="max |D/theory - 1|, 2 px to D/2",
+           title="subharmonic levels")
+    ctx.save_figure(fig, "perf_phase_screens")
+    speed = {}
+    try:
+        from aotools.turbulence.phasescreen import ft_sh_phase_screen
+    except ImportError:
+        ft_sh_phase_screen = None
+    with ctx.step("speed"):
+        for n in (256, 512):
+            T.phase_screen(n, dx, r0, 0)
+            ours = best_time(lambda: T.phase_screen(n, dx, r0, ctx.rng), repeat=5)
+            entry = {"ours_s": ours}
+            if ft_sh_phase_screen is not None:
+                peer = best_time(lambda: ft_sh_phase_screen(r0, n, dx, 1e6, 1e-10), repeat=5)
+                entry.update(peer_s=peer, speedup=peer / ours)
+            speed[n] = entry
+    ctx.metrics.update({"levels": rows, "speed": speed})
+    ctx.say("Accuracy against time (64 px, " + f"{count} screens): " + ", ".join(
+        f"{r['levels']} levels: max error {r['max_rel_error_2px_to_half']:.3f} in {r['time_s'] * 1e3:.1f} ms"
+        for r in rows) + " (the error includes the statistical error of the estimate, a few per cent).")
+    if all("speedup" in v for v in speed.values()):
+        ctx.say("Speed against AOtools' ft_sh_phase_screen (same run): " + ", ".join(
+            f"{n} px: {v['ours_s'] * 1e3:.1f} ms vs {v['peer_s'] * 1e3:.1f} ms (x{v['speedup']:.1f})"
+            for n, v in speed.items()) + ".")
+    else:
+        ctx.say("AOtools is not installed: speeds are ours only: " + ", ".join(
+            f"{n} px: {v['ours_s'] * 1e3:.1f} ms" for n, v in speed.items()) + ".")
