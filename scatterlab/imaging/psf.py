@@ -1,0 +1,139 @@
+r"""Pupils, point-spread functions and transfer functions (Eqs. 66-67, 82-83).
+
+The PSF of a pupil :math:`A(\mathbf u)` with phase :math:`\varphi(\mathbf u)` is
+:math:`h = |\mathcal F\{A e^{j\varphi}\}|^2` (Eq. 83), normalised to unit sum. With the pupil zero-padded by
+``pad`` (>= 2), the PSF is sampled at :math:`\lambda/(\mathrm{pad}\,D)` in angle -- Nyquist for the incoherent
+PSF, whose OTF cuts off at :math:`D/\lambda`. Frequencies below are normalised to that cut-off,
+:math:`\nu = f\lambda/D \in [0, 1]`.
+
+Theory for comparison: the diffraction-limited MTF of a circular pupil,
+:math:`\frac{2}{\pi}[\arccos\nu - \nu\sqrt{1-\nu^2}]`; Fried's long-exposure MTF, that times
+:math:`\exp[-3.44 (\nu D/r_0)^{5/3}]`; and his short-exposure (tilt-removed) MTF with
+:math:`\exp\{-3.44 (\nu D/r_0)^{5/3}[1 - \alpha\nu^{1/3}]\}` (:math:`\alpha = 1` near field, 1/2 far field).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import optimize, special
+
+from scatterlab._checks import as_finite, as_positive
+
+__all__ = ["circular_pupil", "psf", "otf", "mtf", "radial_profile", "airy_pattern", "diffraction_mtf",
+           "long_exposure_mtf", "short_exposure_mtf", "fit_r0"]
+
+
+def circular_pupil(n: int, radius: float, obscuration: float = 0.0) -> np.ndarray:
+    """Binary circular pupil of ``radius`` pixels centred on an ``(n, n)`` grid, optional central obscuration
+    (fraction of the radius in [0, 1))."""
+    if not (isinstance(n, (int, np.integer)) and n >= 4):
+        raise ValueError("n must be an integer >= 4")
+    radius = float(as_positive(radius, "radius"))
+    if radius > n / 2:
+        raise ValueError(f"radius ({radius} px) must fit in the grid (<= n/2 = {n / 2})")
+    if not 0 <= obscuration < 1:
+        raise ValueError("obscuration must be in [0, 1)")
+    y, x = np.mgrid[0:n, 0:n] - (n - 1) / 2
+    r = np.hypot(x, y)
+    return ((r <= radius) & (r >= obscuration * radius)).astype(float)
+
+
+def psf(pupil, phase=None, pad: int = 2) -> np.ndarray:
+    """PSF of ``pupil`` with optional ``phase`` [rad] (Eq. 83), zero-padded by ``pad``, centred, unit sum.
+
+    Parameters
+    ----------
+    pupil : array (..., n, n)
+    phase : array broadcastable to ``pupil``, optional
+    pad : int >= 2 (Nyquist sampling of the incoherent PSF)
+
+    Returns
+    -------
+    array (..., pad n, pad n)
+    """
+    pupil = as_finite(pupil, "pupil")
+    if pad < 2:
+        raise ValueError("pad must be >= 2 for a Nyquist-sampled PSF")
+    field = pupil.astype(complex) if phase is None else pupil * np.exp(1j * as_finite(phase, "phase"))
+    n = pupil.shape[-1]
+    m = pad * n
+    F = np.fft.fft2(field, s=(m, m))
+    h = np.fft.fftshift(F.real**2 + F.imag**2, axes=(-2, -1))
+    return h / h.sum(axis=(-2, -1), keepdims=True)
+
+
+def otf(h) -> np.ndarray:
+    """Optical transfer function of a centred PSF, normalised to 1 at zero frequency (centred)."""
+    h = np.asarray(h, float)
+    O = np.fft.fftshift(np.fft.fft2(np.fft.ifftshift(h, axes=(-2, -1))), axes=(-2, -1))
+    c = h.shape[-1] // 2
+    return O / O[..., c, c][..., None, None]
+
+
+def mtf(h) -> np.ndarray:
+    """Modulation transfer function ``|OTF|`` (centred)."""
+    return np.abs(otf(h))
+
+
+def radial_profile(image, nbins=None) -> tuple[np.ndarray, np.ndarray]:
+    """Azimuthal mean of a centred image: (radius [px], mean) at integer radii."""
+    image = np.asarray(image, float)
+    n = image.shape[-1]
+    y, x = np.indices(image.shape[-2:]) - n // 2
+    r = np.rint(np.hypot(x, y)).astype(int)
+    nb = nbins or n // 2
+    sums = np.bincount(r.ravel(), weights=image.reshape(-1) if image.ndim == 2 else image.ravel(), minlength=nb)
+    counts = np.bincount(r.ravel(), minlength=nb)
+    return np.arange(nb), sums[:nb] / np.maximum(counts[:nb], 1)
+
+
+def airy_pattern(v) -> np.ndarray:
+    """Airy intensity ``[2 J1(v)/v]^2`` at ``v = pi D theta / lambda`` (1 at v = 0; first zero v = 3.8317)."""
+    v = np.asarray(v, float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(v == 0, 1.0, (2 * special.j1(v) / np.where(v == 0, 1, v)) ** 2)
+
+
+def diffraction_mtf(nu) -> np.ndarray:
+    """Diffraction-limited MTF of a circular pupil at normalised frequency ``nu`` in [0, 1] (0 beyond)."""
+    nu = np.clip(np.asarray(nu, float), 0, 1)
+    return 2 / np.pi * (np.arccos(nu) - nu * np.sqrt(1 - nu * nu))
+
+
+def long_exposure_mtf(nu, d_over_r0) -> np.ndarray:
+    """Fried's long-exposure MTF: diffraction-limited MTF times exp(-3.44 (nu D/r0)^(5/3))."""
+    d_over_r0 = float(as_positive(d_over_r0, "d_over_r0"))
+    nu = np.asarray(nu, float)
+    return diffraction_mtf(nu) * np.exp(-3.44 * (nu * d_over_r0) ** (5 / 3))
+
+
+def short_exposure_mtf(nu, d_over_r0, alpha: float = 1.0) -> np.ndarray:
+    """Fried's short-exposure (tilt-removed) MTF; ``alpha = 1`` near field, 0.5 far field."""
+    d_over_r0 = float(as_positive(d_over_r0, "d_over_r0"))
+    nu = np.clip(np.asarray(nu, float), 0, 1)
+    return diffraction_mtf(nu) * np.exp(-3.44 * (nu * d_over_r0) ** (5 / 3) * (1 - alpha * nu ** (1 / 3)))
+
+
+def fit_r0(nu, measured_mtf, diameter, *, floor: float = 0.02) -> float:
+    """Fit r0 [m] of the long-exposure MTF to a measured MTF (the reference's calibration of Fig. 48).
+
+    Least squares in ``log MTF`` over the frequencies from 0 up to where the measured MTF first falls
+    below ``floor``: a measured long-exposure MTF has a noise floor (finite averaging of speckle, detector
+    noise) that would otherwise dominate the logarithmic residuals.
+    """
+    nu = as_finite(nu, "nu")
+    m = as_finite(measured_mtf, "measured_mtf")
+    D = float(as_positive(diameter, "diameter"))
+    order = np.argsort(nu)
+    nu, m = nu[order], m[order]
+    below = np.nonzero((m <= floor) & (nu > 0))[0]
+    stop = nu[below[0]] if below.size else 1.0
+    sel = (m > floor) & (nu > 0) & (nu < min(stop, 1.0))
+    if sel.sum() < 3:
+        raise ValueError("measured_mtf must exceed the floor at three or more frequencies in (0, 1)")
+
+    def resid(p):
+        return np.log(long_exposure_mtf(nu[sel], np.exp(p[0]))) - np.log(m[sel])
+
+    res = optimize.least_squares(resid, [np.log(5.0)])
+    return D / float(np.exp(res.x[0]))
