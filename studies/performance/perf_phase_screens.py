@@ -39,8 +39,20 @@ def run(ctx):
             rows.append({"levels": levels, "max_rel_error_2px_to_half": err, "time_s": t})
             ax.loglog(t, err, "o")
             ax.annotate(f"{levels} levels", (t, err), fontsize=7)
-    ax.set(xlabel="time per 64 px screen [s]", ylabel="max |D/theory - 1|, 2 px to D/2",
-           title="subharmonic levels")
+    sizes = []
+    with ctx.step("sizes"):
+        for n in ((32, 64, 128) if ctx.quick else (32, 64, 128, 256)):
+            T.phase_screen(n, dx, r0, 0)
+            t = best_time(lambda: T.phase_screen(n, dx, r0, ctx.rng), repeat=5)
+            s = np.stack([T.phase_screen(n, dx, r0, ctx.rng) for _ in range(max(50, count * 64 // n))])
+            r, D = T.structure_function(s, n // 2)
+            err = float(np.max(np.abs(D[1:] / (T.STRUCTURE_CONSTANT * (r[1:] * dx / r0) ** (5 / 3)) - 1)))
+            sizes.append({"n": n, "max_rel_error_2px_to_half": err, "time_s": t})
+            ax.loglog(t, err, "s", color="C3")
+            ax.annotate(f"{n} px", (t, err), fontsize=7, color="C3")
+    ctx.metrics["sizes"] = sizes
+    ax.set(xlabel="time per screen [s]", ylabel="max |D/theory - 1|, 2 px to D/2",
+           title="subharmonic levels (64 px) and screen sizes")
     ctx.save_figure(fig, "perf_phase_screens")
     speed = {}
     try:
@@ -59,7 +71,9 @@ def run(ctx):
     ctx.metrics.update({"levels": rows, "speed": speed})
     ctx.say("Accuracy against time (64 px, " + f"{count} screens): " + ", ".join(
         f"{r['levels']} levels: max error {r['max_rel_error_2px_to_half']:.3f} in {r['time_s'] * 1e3:.1f} ms"
-        for r in rows) + " (the error includes the statistical error of the estimate, a few per cent).")
+        for r in rows) + " (the error includes the statistical error of the estimate, a few per cent). "
+        "Screen sizes (default levels): " + ", ".join(
+        f"{s['n']} px: {s['max_rel_error_2px_to_half']:.3f} in {s['time_s'] * 1e3:.1f} ms" for s in sizes) + ".")
     if all("speedup" in v for v in speed.values()):
         ctx.say("Speed against AOtools' ft_sh_phase_screen (same run): " + ", ".join(
             f"{n} px: {v['ours_s'] * 1e3:.1f} ms vs {v['peer_s'] * 1e3:.1f} ms (x{v['speedup']:.1f})"

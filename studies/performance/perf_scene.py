@@ -1,0 +1,52 @@
+"""Time to simulate a whole 4-channel 512 x 512 polarimetric scene (render, PSF from a fresh phase screen,
+channels, noise, Stokes estimate) on this machine; goal: under a second (issue 7, item 8)."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parents[1]))
+from _common import plt  # noqa: E402
+
+from scatterlab.imaging import (ANGLES_0_45_90_135, channel_images, circular_pupil, detect, painted_plate,  # noqa: E402
+                                phase_screen, psf, render_stokes, stokes_from_channels)
+from scatterlab.runtime import Stopwatch, best_time  # noqa: E402
+
+STUDY = {"id": "perf_scene", "title": "Whole 4-channel 512 x 512 scene simulation time",
+         "reproduces": "own performance study (issue 7, item 8)"}
+
+
+def run(ctx):
+    size = 256 if ctx.quick else 512
+    n = size // 2
+    scene = painted_plate(size, rng=0)
+    pupil = circular_pupil(n, n / 2)
+    phase_screen(n, 1.0, n / 10.5, 0)  # build the screen generator's cached weights once
+
+    def simulate(sw=None):
+        sw = sw or Stopwatch()
+        with sw("render"):
+            S = render_stokes(scene)
+        with sw("psf"):
+            h = psf(pupil, phase_screen(n, 1.0, n / 10.5, ctx.rng), pad=2)
+        with sw("channels"):
+            I = channel_images(S, ANGLES_0_45_90_135, h)
+        with sw("noise"):
+            counts = detect(I, ctx.rng, photons=2e4, read_noise=10, dark_current=5)
+        with sw("stokes"):
+            return stokes_from_channels(counts, ANGLES_0_45_90_135)
+
+    with ctx.step("timing"):
+        total = best_time(simulate, repeat=5)
+        sw = Stopwatch()
+        simulate(sw)
+    ctx.metrics.update({"size": size, "total_s": total, "steps_s": sw.times})
+    pyplot = plt()
+    fig, ax = pyplot.subplots(figsize=(5, 3))
+    ax.bar(list(sw.times), list(sw.times.values()))
+    ax.set_ylabel("time [s]")
+    ax.set_title(f"{size} x {size}, 4 channels: {total:.2f} s")
+    ctx.save_figure(fig, "perf_scene")
+    ctx.say(f"A whole 4-channel {size} x {size} scene takes {total:.2f} s (best of 5; goal < 1 s at 512): "
+            + ", ".join(f"{k} {v * 1e3:.0f} ms" for k, v in sw.times.items()) + ".")
