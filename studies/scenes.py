@@ -51,12 +51,15 @@ def run(ctx):
                 axes[r, k].axis("off")
         ctx.metrics[f"clean_dolp_paint_{name}"] = float(clean_dolp[scene.labels == 0].mean())
         ctx.metrics[f"clean_dolp_metal_{name}"] = float(clean_dolp[scene.labels == 1].mean())
+        ctx.metrics[f"brightness_metal_over_paint_{name}"] = float(S[0][scene.labels == 1].mean()
+                                                                    / S[0][scene.labels == 0].mean())
     ctx.save_figure(fig, "scenes")
     m = ctx.metrics
     ctx.say(
         f"Clean DOLP: paint {m['clean_dolp_paint_aluminium']:.2f}, bare aluminium {m['clean_dolp_metal_aluminium']:.3f}, "
         f"bare steel {m['clean_dolp_metal_steel']:.3f} at 50 deg (the paint/metal contrast the classifier uses). "
-        "In this specular geometry the smooth bare metal is ~100x brighter than the paint, so turbulence spreads "
+        f"In this specular geometry the smoother bare metal is {m['brightness_metal_over_paint_aluminium']:.0f}x "
+        f"(aluminium) and {m['brightness_metal_over_paint_steel']:.0f}x (steel) brighter than the paint, so turbulence spreads "
         "its unpolarized light far over the painted areas and the DOLP collapses well beyond the letter edges; "
         "DOLP RMSE against the clean image: " + ", ".join(f"{k.split('_', 2)[2]}: {v:.3f}" for k, v in m.items() if k.startswith("dolp_rmse"))
         + ". These are the data the deconvolution of issue 8 must undo."
