@@ -35,7 +35,7 @@ def run(ctx):
             with ctx.step(f"{name}_{sigma}"):
                 d = Model(sigma).dolp(eta, ti, TR, PH)
             ax = axes[row, col]
-            _, _ = polar_contour(tr, phi, d, ax=ax, levels=np.linspace(0, 1, 21), vmin=0, vmax=1)
+            polar_contour(tr, phi, d, ax=ax, levels=np.linspace(0, 1, 21), vmin=0, vmax=1)
             ax.set_title(f"{name}, roughness {sigma}", fontsize=9)
             k = np.unravel_index(np.argmax(d), d.shape)
             ctx.metrics[f"max_dolp_{name}_{sigma}"] = float(d[k])

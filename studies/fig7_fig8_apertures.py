@@ -31,7 +31,7 @@ def run(ctx):
             img_dl = convolve(obj, h_dl)
             img_tu = convolve(obj, h_tu)
         d_r0 = 2 * R / r0_px
-        for row, (im, title) in enumerate([(img_dl, "diffraction-limited"), (np.fft.fftshift(h_dl) * 0 + h_dl, "PSF"),
+        for row, (im, title) in enumerate([(img_dl, "diffraction-limited"), (h_dl, "PSF"),
                                            (img_tu, f"turbulence, D/r0 = {d_r0:.1f}"), (h_tu, "PSF (turbulence)")]):
             ax = axes[row, col]
             c = im.shape[0] // 2

@@ -31,7 +31,7 @@ from scatterlab._checks import as_finite
 from scatterlab.polarization import linear_polarizer, linear_retarder
 
 __all__ = ["Errors", "switched_wave_plate_psg", "switched_wave_plate_psa", "rotating_retarder_psg",
-           "rotating_retarder_psa", "tetrahedral_psg", "tetrahedral_psa", "psa_from_psg", "Instrument",
+           "rotating_retarder_psa", "tetrahedral_psg", "tetrahedral_psa", "Instrument",
            "condition_number"]
 
 
@@ -60,43 +60,35 @@ class Errors:
         return value[k] if np.ndim(value) else value
 
 
-def _column(M):
-    return M[:, 0]
+_SWITCHED_PLATES = (None, (np.pi, np.pi / 4), (np.pi, np.pi / 8), (np.pi / 2, np.pi / 4))  # none, V, +45, circular
+
+
+def _switched_arm(errors: Errors):
+    """The arm's polarizer and, per configuration, the inserted wave plate (identity when none)."""
+    P = linear_polarizer(errors.polarizer_azimuth, errors.extinction_ratio)
+    plates = []
+    for k, plate in enumerate(_SWITCHED_PLATES):
+        if plate is None:
+            plates.append(np.eye(4))
+        else:
+            plates.append(linear_retarder(plate[0] + errors.per_state(errors.retardance, k),
+                                          plate[1] + errors.per_state(errors.azimuth, k)))
+    return P, plates
 
 
 def switched_wave_plate_psg(errors: Errors = Errors()) -> np.ndarray:
-    """W of the reference's switched wave-plate PSG (columns: H, V, +45, circular), shape (4, 4)."""
-    P = linear_polarizer(errors.polarizer_azimuth, errors.extinction_ratio)
-    plates = [None, (np.pi, np.pi / 4), (np.pi, np.pi / 8), (np.pi / 2, np.pi / 4)]
-    cols = []
-    for k, plate in enumerate(plates):
-        M = P
-        if plate is not None:
-            ret = plate[0] + errors.per_state(errors.retardance, k)
-            az = plate[1] + errors.per_state(errors.azimuth, k)
-            M = linear_retarder(ret, az) @ P
-        cols.append(M @ np.array([1.0, 0, 0, 0]) * 2)  # unit-intensity source before the polarizer: S0 = 1
-    return np.stack(cols, axis=1)
+    """W of the reference's switched wave-plate PSG (columns: H, V, +45, circular), shape (4, 4).
 
-
-def psa_from_psg(psg_chain_matrices) -> np.ndarray:
-    """A from the analyser chains: row k is the first row of chain k (the detector reads S0)."""
-    return np.stack([M[0] for M in psg_chain_matrices], axis=0)
+    Unit-intensity unpolarized source before the polarizer, scaled so an ideal state has S0 = 1.
+    """
+    P, plates = _switched_arm(errors)
+    return np.stack([2 * (R @ P)[:, 0] for R in plates], axis=1)
 
 
 def switched_wave_plate_psa(errors: Errors = Errors()) -> np.ndarray:
     """A of the mirror-image PSA (wave plates, then a horizontal polarizer, then the detector), shape (4, 4)."""
-    P = linear_polarizer(errors.polarizer_azimuth, errors.extinction_ratio)
-    plates = [None, (np.pi, np.pi / 4), (np.pi, np.pi / 8), (np.pi / 2, np.pi / 4)]
-    rows = []
-    for k, plate in enumerate(plates):
-        M = P
-        if plate is not None:
-            ret = plate[0] + errors.per_state(errors.retardance, k)
-            az = plate[1] + errors.per_state(errors.azimuth, k)
-            M = P @ linear_retarder(ret, az)
-        rows.append(2 * M[0])
-    return np.stack(rows, axis=0)
+    P, plates = _switched_arm(errors)
+    return np.stack([2 * (P @ R)[0] for R in plates], axis=0)
 
 
 _RR_ANGLES = np.radians([-51.7, -15.1, 15.1, 51.7])  # a common near-optimal rotating-retarder set

@@ -25,7 +25,7 @@ def run(ctx):
     n = 2 * 10**5 if ctx.quick else 10**6
     n_peer = 300 if ctx.quick else 3000
     rng = ctx.rng
-    eta, sigma = 3.6 - 5.88j, 0.3 / np.sqrt(2) * np.sqrt(2)
+    eta, sigma = 3.6 - 5.88j, 0.3
     s_peer = float(f"{np.sqrt(2) * sigma:.6g}")
     sigma = s_peer / np.sqrt(2)  # the peer parses 6 significant digits
     ti = rng.uniform(np.radians(10), np.radians(85), n)
