@@ -42,6 +42,7 @@ Fast paths (they agree with the full matrix to rounding, tested):
 
 from __future__ import annotations
 
+import copy
 import functools
 
 import numpy as np
@@ -409,10 +410,19 @@ def _chunked(fn, tail: tuple, eta, *angles):
         return fn(eta, *angles)
     flat = [np.ravel(a) for a in angles]
     eta_flat = eta if isinstance(eta, str) else np.ravel(eta)
+    model = fn.__self__
+    sigma = None
+    if model.distribution is None and np.ndim(model.sigma) > 0:  # an array of roughnesses: slice it too
+        sigma = np.broadcast_to(model.sigma, shape).ravel()
     out = np.empty((n,) + tail)
     for start in range(0, n, _CHUNK):
         sl = slice(start, start + _CHUNK)
-        out[sl] = fn(eta_flat if isinstance(eta, str) else eta_flat[sl], *(a[sl] for a in flat))
+        f = fn
+        if sigma is not None:
+            part = copy.copy(model)
+            part.sigma = sigma[sl]
+            f = getattr(part, fn.__name__)
+        out[sl] = f(eta_flat if isinstance(eta, str) else eta_flat[sl], *(a[sl] for a in flat))
     return out.reshape(shape + tail)
 
 

@@ -227,3 +227,22 @@ def test_generalised_cauchy_distribution_in_the_model():
     rho = cauchy.dhr_pec(np.radians(30))
     assert 0 < rho <= 1
     assert np.all(np.isfinite(cauchy.dolp(ETA, ti, tr, 1.0)))
+
+
+def test_array_sigma_larger_than_one_chunk_matches_scalar_models():
+    """A per-pixel roughness array is sliced with the angles when evaluation is chunked.
+
+    Scalar sigma reads rho from the 1-D cache (documented to add < 1e-8), array sigma from the 2-D table."""
+    from scatterlab.pbrdf import Model
+
+    rng = np.random.default_rng(3)
+    sig = rng.choice([0.1, 0.3, 0.6], size=(3000, 1))
+    ti = np.radians(np.r_[20, 35, 50, 65])
+    eta = 1.5 - 0.02j
+    got = Model(sig).dolp(eta, ti, ti)
+    F = Model(sig).mueller_linear(eta, ti, ti + 0.1, 2.0)
+    for s in (0.1, 0.3, 0.6):
+        sel = sig[:, 0] == s
+        np.testing.assert_allclose(got[sel], np.broadcast_to(Model(s).dolp(eta, ti, ti), got[sel].shape), rtol=1e-8)
+        want = Model(s).mueller_linear(eta, ti, ti + 0.1, 2.0)
+        np.testing.assert_allclose(F[sel], np.broadcast_to(want, F[sel].shape), rtol=1e-5, atol=1e-12)
