@@ -5,7 +5,7 @@ The forward model is the pBRDF DOLP of :class:`scatterlab.pbrdf.Model` (Eq. 203 
 
 .. math:: \min_{n,\kappa,\sigma} \sum_j [\mathcal P^{thy}(n - j\kappa, \sigma; \theta_{i,j}, \theta_{r,j}, \phi_j) - \mathcal P_j]^2
 
-with a vectorised Levenberg-Marquardt iteration in numpy (forward-difference Jacobian, per-pixel damping,
+with a vectorised Levenberg-Marquardt iteration in numpy (analytic Jacobian, per-pixel damping,
 bounds by projection), from several starting points so that the metal/dielectric ambiguity does not trap a
 pixel in a local minimum; the best start wins per pixel. NaN measurements are masked (left out of the
 residuals); a pixel with fewer valid measurements than unknowns is reported, not fitted. The parameter
@@ -24,6 +24,7 @@ import numpy as np
 from scipy import optimize
 
 from scatterlab._checks import as_angle
+from scatterlab.inversion.forward import DolpForward
 from scatterlab.pbrdf import Model
 
 __all__ = ["fit_dolp", "fit_dolp_per_pixel", "DolpFit", "model_dolp", "DEFAULT_BOUNDS", "DEFAULT_STARTS"]
@@ -85,10 +86,86 @@ def _prepare(dolp, theta_i, theta_r, phi):
     return y, ti, tr, ph
 
 
+def _bounds(bounds, P):
+    b = dict(DEFAULT_BOUNDS, **(bounds or {}))
+    for name, (lo, hi) in b.items():
+        if not lo < hi:
+            raise ValueError(f"bounds[{name!r}] must be (low, high) with low < high, got {(lo, hi)}")
+    if b["n"][0] < 0 or b["kappa"][0] < 0 or b["sigma"][0] < 1e-3 or b["sigma"][1] > 2.5:
+        raise ValueError("bounds must keep n >= 0, kappa >= 0 and sigma within [1e-3, 2.5]")
+    lo = np.array([b["n"][0], b["kappa"][0], b["sigma"][0]][:P])
+    hi = np.array([b["n"][1], b["kappa"][1], b["sigma"][1]][:P])
+    return lo, hi
+
+
+def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
+    """Bounded LM from starts ``p`` (N, P) for N pixels at once; returns (p, cost, converged, iterations).
+
+    Converged pixels leave the working set, so an iteration costs in proportion to the pixels still moving.
+    A pixel converges when a successful step changes the cost by less than ``tol`` (relative) or moves every
+    parameter by less than ``1e-10`` of its bound range, or when the damping grows past 1e10 without success.
+    """
+    N, P = p.shape
+    p = p.copy()
+    cost = np.full(N, np.nan)
+    done = ~active
+    idx = np.flatnonzero(active)
+    f, J = forward.value_and_jacobian(p[idx], rows=idx)
+    r = np.where(mask[idx], f - y0[idx], 0.0)
+    c = 0.5 * np.sum(r * r, -1)
+    lam = np.full(idx.size, 1e-3)
+    xtol = 1e-10 * (hi - lo)
+    iterations = 0
+    for _ in range(max_iter):
+        if idx.size == 0:
+            break
+        m = mask[idx]
+        J = np.where(m[..., None], J, 0.0)
+        A = np.einsum("nmi,nmj->nij", J, J)
+        g = np.einsum("nmi,nm->ni", J, r)
+        pi = p[idx]
+        # active bounds: a parameter on its bound whose descent direction leaves the box is held there,
+        # and the step is solved in the free subspace (projection alone stalls along the bound)
+        held = ((pi <= lo) & (g > 0)) | ((pi >= hi) & (g < 0))
+        free = ~held
+        A = A * (free[:, :, None] & free[:, None, :]) + np.eye(P) * held[:, None, :]
+        g = np.where(free, g, 0.0)
+        diag = np.diagonal(A, axis1=-2, axis2=-1)
+        A_damped = A + lam[:, None, None] * (np.eye(P) * (diag[:, None, :] + 1e-12))
+        with np.errstate(all="ignore"):
+            delta = -np.linalg.solve(A_damped, g[..., None])[..., 0]
+        delta = np.where(np.isfinite(delta), delta, 0.0)
+        p_new = np.clip(pi + delta, lo, hi)
+        f_new, J_new = forward.value_and_jacobian(p_new, rows=idx)
+        r_new = np.where(m, f_new - y0[idx], 0.0)
+        c_new = 0.5 * np.sum(r_new * r_new, -1)
+        better = c_new < c
+        rel = np.where(better, (c - c_new) / np.maximum(c, 1e-300), 0.0)
+        small_step = np.all(np.abs(p_new - pi) <= xtol, axis=-1)
+        finished = (better & ((rel < tol) | small_step)) | (~better & (lam > 1e10)) | (np.minimum(c, c_new) < 1e-30)
+        p[idx] = np.where(better[:, None], p_new, pi)
+        r = np.where(better[:, None], r_new, r)
+        J = np.where(better[:, None, None], J_new, J)
+        c = np.where(better, c_new, c)
+        lam = np.where(better, lam / 3, lam * 4)
+        iterations += 1
+        if np.any(finished):
+            cost[idx[finished]] = c[finished]
+            done[idx[finished]] = True
+            keep = ~finished
+            idx, r, J, c, lam = idx[keep], r[keep], J[keep], c[keep], lam[keep]
+    cost[idx] = c  # not converged within max_iter: best point so far
+    return p, cost, done, iterations
+
+
 def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bounds=None,
-             starts=DEFAULT_STARTS, sigma0: float = 0.3, max_iter: int = 100, tol: float = 1e-14,
+             starts=DEFAULT_STARTS, sigma0: float = 0.3, max_iter: int = 200, tol: float = 1e-12,
              **model_kw) -> DolpFit:
     """Batched bounded least squares of (n, kappa[, sigma]) to DOLP measured at M geometries.
+
+    Every pixel runs a Levenberg-Marquardt iteration with its own damping, in one vectorised pass; the
+    Jacobian is analytic in (n, kappa) (:class:`~scatterlab.inversion.forward.DolpForward`). Each start of
+    ``starts`` is run for every pixel and the lowest cost wins per pixel.
 
     Parameters
     ----------
@@ -98,80 +175,41 @@ def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bound
     phi : float or array (M,) [rad], default pi (specular plane)
     sigma : float or array (...), optional
         Known roughness; when given only (n, kappa) are fitted.
-    noise : float, optional
+    noise : float or array (...), optional
         DOLP noise standard deviation for the covariance (default: estimated from the residuals).
     bounds : dict, optional
         ``{"n": (lo, hi), "kappa": (lo, hi), "sigma": (lo, hi)}``; defaults in ``DEFAULT_BOUNDS``.
     starts : sequence of (n, kappa)
-    max_iter, tol : Levenberg-Marquardt limits (iterations; relative cost decrease).
+    sigma0 : float -- starting roughness.
+    max_iter, tol : Levenberg-Marquardt limits (iterations per start; relative cost decrease).
 
     Returns
     -------
     DolpFit
     """
     y, ti, tr, ph = _prepare(dolp, theta_i, theta_r, phi)
-    b = dict(DEFAULT_BOUNDS, **(bounds or {}))
     fit_sigma = sigma is None
     P = 3 if fit_sigma else 2
-    lo = np.array([b["n"][0], b["kappa"][0], b["sigma"][0]][:P])
-    hi = np.array([b["n"][1], b["kappa"][1], b["sigma"][1]][:P])
+    lo, hi = _bounds(bounds, P)
     batch = y.shape[:-1]
     mask = np.isfinite(y)
     valid = mask.sum(-1) >= P
     y0 = np.where(mask, y, 0.0)
     sig_known = None if fit_sigma else np.broadcast_to(np.asarray(sigma, float), batch)
+    forward = DolpForward(ti, tr, ph, sigma=None if fit_sigma else sig_known.ravel(), **model_kw)
 
-    def predict(p):
-        s = p[..., 2] if fit_sigma else sig_known
-        return model_dolp(p[..., 0], p[..., 1], s, ti, tr, ph, **model_kw)
-
-    def residual(p):
-        return np.where(mask, predict(p) - y0, 0.0)
-
-    def jacobian(p, r):
-        J = np.empty(batch + (y.shape[-1], P))
-        for k in range(P):
-            h = 1e-7 * np.maximum(1.0, np.abs(p[..., k]))
-            q = p.copy()
-            up = q[..., k] + h <= hi[k]
-            q[..., k] = np.where(up, q[..., k] + h, q[..., k] - h)
-            step = np.where(up, h, -h)
-            J[..., k] = (residual(q) - r) / step[..., None]
-        return J
-
-    best_p = best_cost = None
+    y0f, maskf, validf = y0.reshape(-1, y.shape[-1]), mask.reshape(-1, y.shape[-1]), valid.ravel()
+    best_p = best_cost = best_done = None
     total_iter = 0
     for n0, k0 in starts:
-        p = np.empty(batch + (P,))
-        p[..., 0], p[..., 1] = n0, k0
+        p = np.empty((validf.size, P))
+        p[:, 0], p[:, 1] = n0, k0
         if fit_sigma:
-            p[..., 2] = sigma0
+            p[:, 2] = sigma0
         p = np.clip(p, lo, hi)
-        r = residual(p)
-        cost = 0.5 * np.sum(r * r, -1)
-        lam = np.full(batch, 1e-3)
-        done = ~valid
-        for it in range(max_iter):
-            J = jacobian(p, r)
-            A = np.einsum("...mi,...mj->...ij", J, J)
-            g = np.einsum("...mi,...m->...i", J, r)
-            diag = np.diagonal(A, axis1=-2, axis2=-1)
-            A_damped = A + lam[..., None, None] * (np.eye(P) * (diag[..., None, :] + 1e-12))
-            delta = -np.linalg.solve(A_damped, g[..., None])[..., 0]
-            p_new = np.clip(p + delta, lo, hi)
-            r_new = residual(p_new)
-            cost_new = 0.5 * np.sum(r_new * r_new, -1)
-            better = (cost_new < cost) & ~done
-            rel = np.where(better, (cost - cost_new) / np.maximum(cost, 1e-300), 0.0)
-            p = np.where(better[..., None], p_new, p)
-            r = np.where(better[..., None], r_new, r)
-            converged_now = (better & (rel < tol)) | (~better & (lam > 1e10)) | (cost_new < 1e-30)
-            cost = np.where(better, cost_new, cost)
-            lam = np.where(better, lam / 3, lam * 4)
-            done |= converged_now
-            total_iter += 1
-            if np.all(done):
-                break
+        p, cost, done, it = _levenberg_marquardt(forward, y0f, maskf, p, lo, hi, validf, max_iter, tol)
+        p, cost, done = p.reshape(batch + (P,)), cost.reshape(batch), done.reshape(batch)
+        total_iter += it
         if best_p is None:
             best_p, best_cost, best_done = p, cost, done
         else:
@@ -179,10 +217,11 @@ def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bound
             best_p = np.where(take[..., None], p, best_p)
             best_done = np.where(take, done, best_done)
             best_cost = np.where(take, cost, best_cost)
-    r = residual(best_p)
-    J = jacobian(best_p, r)
+    _, J = forward.value_and_jacobian(best_p.reshape(-1, P))
+    J = J.reshape(batch + J.shape[-2:])
+    J = np.where(mask[..., None], J, 0.0)
     m = mask.sum(-1)
-    s2 = (noise**2 if noise is not None
+    s2 = (np.asarray(noise, float) ** 2 if noise is not None
           else np.where(m > P, 2 * best_cost / np.maximum(m - P, 1), np.nan))
     A = np.einsum("...mi,...mj->...ij", J, J)
     with np.errstate(all="ignore"):
@@ -196,13 +235,15 @@ def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bound
 
 def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=None,
                        starts=DEFAULT_STARTS, sigma0: float = 0.3, **model_kw) -> DolpFit:
-    """Baseline: one ``scipy.optimize.least_squares`` (trust-region reflective) per pixel and start."""
+    """Baseline: one ``scipy.optimize.least_squares`` (trust-region reflective) per pixel and start.
+
+    Same forward model, analytic Jacobian, starts and bounds as :func:`fit_dolp`, so that comparing the two
+    measures batching alone. No covariance (NaN).
+    """
     y, ti, tr, ph = _prepare(dolp, theta_i, theta_r, phi)
-    b = dict(DEFAULT_BOUNDS, **(bounds or {}))
     fit_sigma = sigma is None
     P = 3 if fit_sigma else 2
-    lo = [b["n"][0], b["kappa"][0], b["sigma"][0]][:P]
-    hi = [b["n"][1], b["kappa"][1], b["sigma"][1]][:P]
+    lo, hi = _bounds(bounds, P)
     batch = y.shape[:-1]
     flat = y.reshape(-1, y.shape[-1])
     sig_flat = None if fit_sigma else np.broadcast_to(np.asarray(sigma, float), batch).ravel()
@@ -212,15 +253,19 @@ def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=
         ok = np.isfinite(row)
         if ok.sum() < P:
             continue
+        fwd = DolpForward(ti[ok], tr[ok], ph[ok], sigma=None if fit_sigma else sig_flat[i], **model_kw)
+        target = row[ok]
 
-        def res(p, row=row, ok=ok, i=i):
-            s = p[2] if fit_sigma else sig_flat[i]
-            return model_dolp(p[0], p[1], s, ti[ok], tr[ok], ph[ok], **model_kw) - row[ok]
+        def res(p, fwd=fwd, target=target):
+            return fwd(p) - target
+
+        def jac(p, fwd=fwd):
+            return fwd.value_and_jacobian(p)[1]
 
         best = None
         for n0, k0 in starts:
-            x0 = np.clip([n0, k0] + ([sigma0] if fit_sigma else []), np.array(lo) + 1e-9, np.array(hi) - 1e-9)
-            res_ = optimize.least_squares(res, x0, bounds=(lo, hi), xtol=1e-14, ftol=1e-14, gtol=1e-14)
+            x0 = np.clip([n0, k0] + ([sigma0] if fit_sigma else []), lo + 1e-9, hi - 1e-9)
+            res_ = optimize.least_squares(res, x0, jac=jac, bounds=(lo, hi), xtol=1e-14, ftol=1e-14, gtol=1e-14)
             if best is None or res_.cost < best.cost:
                 best = res_
         out[i, :P] = best.x

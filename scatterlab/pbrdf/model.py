@@ -368,6 +368,36 @@ class Model:
             return _chunked(self._dolp_inplane_chunk, (), eta, ti, tr, ph)
         return _chunked(self._dolp_chunk, (), eta, ti, tr, ph)
 
+    def specular_fraction(self, theta_i, theta_r, phi=np.pi) -> np.ndarray:
+        r"""Fraction of :math:`F_{00}` carried by the specular lobe, :math:`\Gamma/(\Gamma + D)` (Eq. 203).
+
+        The DOLP factorises into the facet's DOLP, a function of eta and the facet geometry only, times this
+        fraction, a function of roughness and geometry only: ``dolp = facet_dolp(eta, beta) * fraction``.
+        Inversion uses the split to differentiate each factor on its own. 1 where both terms vanish.
+
+        Parameters
+        ----------
+        theta_i, theta_r : array_like [rad]
+        phi : array_like [rad], default ``pi``
+
+        Returns
+        -------
+        ndarray in ``[0, 1]``, the broadcast shape of the angles and ``sigma``.
+        """
+        ti, tr, ph = check_angles(theta_i, theta_r, phi)
+        if self.distribution is None:
+            shape = np.broadcast_shapes(ti.shape, np.shape(self.sigma))
+            ti, tr, ph = (np.broadcast_to(a, shape) for a in (ti, tr, ph))
+        return _chunked(self._specular_fraction_chunk, (), PEC, ti, tr, ph)
+
+    def _specular_fraction_chunk(self, eta, ti, tr, ph):
+        if np.all(ph == np.pi):
+            half = (ti - tr) / 2
+            geo = _InPlane(np.cos(ti), np.cos(tr), np.tan(half) ** 2, np.cos(half), np.cos((ti + tr) / 2))
+        else:
+            geo = facet_geometry(ti, tr, ph, checked=True)
+        return _ratio(self._gamma(geo), self._diffuse_factor(ti, tr))
+
     def _dolp_inplane_chunk(self, eta, ti, tr, ph):
         gamma, D, rs, rp, _ = self._inplane_parts(eta, ti, tr)
         Rs, Rp = rs.real**2 + rs.imag**2, rp.real**2 + rp.imag**2
