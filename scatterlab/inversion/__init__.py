@@ -1,9 +1,16 @@
-"""Inversion of (n, kappa, sigma) from multi-geometry DOLP (in progress: batched least squares so far).
+"""Inversion of (n, kappa, sigma) from multi-geometry DOLP (Sec. 3.1.2.3, Eqs. 115-117; Sec. 7.2, Eqs. 199-204).
 
-``fit_dolp(dolp, theta_i, theta_r, ...)`` returns a result with ``.n``, ``.kappa``, ``.sigma`` over the
-batch's leading axes.
+* :func:`fit_dolp` -- batched bounded least squares over leading axes (whole images at once);
+  :func:`fit_dolp_per_pixel` is the per-pixel scipy baseline;
+* :func:`thilak_two_step` -- Thilak et al.'s two-step method (Eqs. 116-117), the comparison baseline;
+* :func:`sample_posterior` / :func:`sample_posteriors` -- emcee posterior sampling with diagnostics,
+  multimodality detection and HDF5 checkpoints;
+* :func:`fisher_information`, :func:`crlb` -- experiment design;
+* :func:`scatterlab.inversion.report.posterior_report` -- corner, traces, predictive band, tables.
 """
 
+from scatterlab.inversion.design import crlb, fisher_information
+from scatterlab.inversion.forward import DolpForward
 from scatterlab.inversion.least_squares import (
     DEFAULT_BOUNDS,
     DEFAULT_STARTS,
@@ -12,5 +19,16 @@ from scatterlab.inversion.least_squares import (
     fit_dolp_per_pixel,
     model_dolp,
 )
+from scatterlab.inversion.posterior import (
+    ConvergenceWarning,
+    Posterior,
+    local_minima,
+    sample_posterior,
+    sample_posteriors,
+    split_rhat,
+)
+from scatterlab.inversion.thilak import ThilakFit, thilak_two_step
 
-__all__ = ["fit_dolp", "fit_dolp_per_pixel", "DolpFit", "model_dolp", "DEFAULT_BOUNDS", "DEFAULT_STARTS"]
+__all__ = ["fit_dolp", "fit_dolp_per_pixel", "DolpFit", "model_dolp", "DEFAULT_BOUNDS", "DEFAULT_STARTS",
+           "DolpForward", "sample_posterior", "sample_posteriors", "Posterior", "ConvergenceWarning",
+           "local_minima", "split_rhat", "thilak_two_step", "ThilakFit", "fisher_information", "crlb"]

@@ -25,11 +25,16 @@ With sigma known the fraction is computed once for the whole fit.
 from __future__ import annotations
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from scatterlab._checks import as_angle
 from scatterlab.pbrdf import Model
+from scatterlab.pbrdf.geometry import facet_geometry
 
 __all__ = ["DolpForward"]
+
+_SIGMA_TABLE = (1e-3, 2.5)
+_SIGMA_NODES = 4097
 
 
 def _facet_dolp_inplane(n, kappa, cos_beta, *, gradient: bool):
@@ -120,9 +125,63 @@ class DolpForward:
             grad[..., k] = (f(hi_n, hi_k) - f(lo_n, lo_k)) / step[..., None]
         return P, grad
 
+    def _build_fraction_table(self):
+        """Per geometry: log(Gamma/p) (sigma-free for Torrance-Sparrow and no shadowing) and D on a log-sigma grid."""
+        shadowing = self.model_kw.get("shadowing", "torrance-sparrow")
+        if (shadowing == "smith" or self.model_kw.get("diffuse", "hyde") != "hyde"
+                or self.model_kw.get("distribution") is not None):
+            return None  # Smith's G depends on sigma; the reciprocal D has kinks a linear table smears
+        ti, tr, ph = self.theta_i, self.theta_r, self.phi
+        lg1, _ = Model(1.0, **self.model_kw).log_lobe_terms(ti, tr, ph)
+        t2 = facet_geometry(ti, tr, ph, checked=True).tan2_alpha
+        self._t2 = np.where(np.isfinite(t2), t2, 0.0)
+        self._log_gop = lg1 + self._t2 / 2 + np.log(2 * np.pi)  # -inf where facets are hidden
+        grid = np.linspace(np.log(_SIGMA_TABLE[0]), np.log(_SIGMA_TABLE[1]), _SIGMA_NODES)
+        _, log_d = Model(np.exp(grid)[:, None], **self.model_kw).log_lobe_terms(ti, tr, ph)
+        D = np.exp(log_d)
+        self._dD = CubicSpline(grid, D, axis=0)(grid, 1)  # node slopes dD/dlog(sigma)
+        return grid, D
+
+    def _fraction_tabulated(self, sigma, gradient):
+        grid, D_tab = self._table
+        h = grid[1] - grid[0]
+        x = (np.log(sigma) - grid[0]) / h
+        k = np.clip(x.astype(np.intp), 0, grid.size - 2)
+        f = (x - k)[..., None]
+        D0, D1 = D_tab[k], D_tab[k + 1]
+        # cubic Hermite with the spline's node slopes (h^4 accurate where D is smooth); D = 0 where rho is
+        # clamped at 1 (the model's own discontinuity, Gamma/(Gamma + 0) = 1): a cell next to a zero node is
+        # linear, and a cell touching one is taken as zero rather than a spurious tiny D
+        m0, m1 = self._dD[k] * h, self._dD[k + 1] * h
+        f2, f3 = f * f, f * f * f
+        cubic = (2 * f3 - 3 * f2 + 1) * D0 + (f3 - 2 * f2 + f) * m0 + (-2 * f3 + 3 * f2) * D1 + (f3 - f2) * m1
+        near_zero = (D_tab[np.maximum(k - 1, 0)] <= 0) | (D_tab[np.minimum(k + 2, grid.size - 1)] <= 0)
+        D = np.where((D0 > 0) & (D1 > 0), np.where(near_zero, D0 * (1 - f) + D1 * f, cubic), 0.0)
+        s = sigma[..., None]
+        with np.errstate(under="ignore", divide="ignore"):
+            G = np.exp(self._log_gop - self._t2 / (2 * s * s) - np.log(2 * np.pi * s * s))
+        tot = G + D
+        safe = np.where(tot > 0, tot, 1.0)
+        R = np.where(tot > 0, G / safe, np.where(D > 0, 0.0, 1.0))
+        if not gradient:
+            return R, None
+        dG = G * (self._t2 / s**3 - 2 / s)
+        dcubic = ((6 * f2 - 6 * f) * D0 + (3 * f2 - 4 * f + 1) * m0 + (6 * f - 6 * f2) * D1 + (3 * f2 - 2 * f) * m1)
+        dD = np.where((D0 > 0) & (D1 > 0), np.where(near_zero, D1 - D0, dcubic), 0.0) / (h * s)
+        return R, np.where(tot > 0, (dG * D - G * dD) / (safe * safe), 0.0)
+
     def fraction(self, sigma, *, gradient: bool = False):
-        """Specular fraction Gamma/(Gamma + D) (..., M) and, with ``gradient``, its sigma derivative (..., M)."""
+        """Specular fraction Gamma/(Gamma + D) (..., M) and, with ``gradient``, its sigma derivative (..., M).
+
+        For Beckmann slopes, Torrance-Sparrow (or no) shadowing and the "hyde" diffuse term: Gamma exactly (analytic in sigma) and D
+        interpolated (cubic Hermite) in log sigma on 4097 nodes over [1e-3, 2.5] (measured error in the tests);
+        otherwise Model.specular_fraction with a central difference.
+        """
         sigma = np.asarray(sigma, float)
+        if not hasattr(self, "_table"):
+            self._table = self._build_fraction_table()
+        if (self._table is not None and np.all(sigma >= _SIGMA_TABLE[0]) and np.all(sigma <= _SIGMA_TABLE[1])):
+            return self._fraction_tabulated(sigma, gradient)
 
         def f(s):
             return Model(s[..., None], **self.model_kw).specular_fraction(self.theta_i, self.theta_r, self.phi)

@@ -136,6 +136,13 @@ class Model:
 
     def _gamma(self, geo) -> np.ndarray:
         """Gamma of Eq. 204 (general distribution and shadowing) [1/sr]."""
+        t2 = geo.tan2_alpha
+        finite = np.isfinite(t2)
+        t2s = np.where(finite, t2, 0.0)
+        return np.where(finite, self._gamma_over_pdf(geo) * self._slope_pdf(t2s), 0.0)
+
+    def _gamma_over_pdf(self, geo) -> np.ndarray:
+        """Gamma / p(tan^2 alpha): G (1 + tan^2 alpha)^2 / (4 cos(theta_i) cos(theta_r)) (0 where alpha >= 90 deg)."""
         ci, cr, t2 = geo.cos_theta_i, geo.cos_theta_r, geo.tan2_alpha
         if self.shadowing == "torrance-sparrow":
             # G/(ci cr) = min(1/(ci cr), k/ci, k/cr), k = 2 cos(alpha)/cos(beta): no 0 * inf
@@ -158,8 +165,7 @@ class Model:
             g_over = G / (ci * cr)
         finite = np.isfinite(t2)
         t2s = np.where(finite, t2, 0.0)
-        p = self._slope_pdf(t2s) * (1 + t2s) ** 2  # p / cos^4(alpha)
-        return np.where(finite, g_over * p / 4, 0.0)
+        return np.where(finite, g_over * (1 + t2s) ** 2 / 4, 0.0)  # 1/cos^4(alpha) = (1 + tan^2)^2
 
     # ------------------------------------------------------------------ DHR and diffuse
     def dhr_pec(self, theta_i) -> np.ndarray:
@@ -389,6 +395,32 @@ class Model:
             shape = np.broadcast_shapes(ti.shape, np.shape(self.sigma))
             ti, tr, ph = (np.broadcast_to(a, shape) for a in (ti, tr, ph))
         return _chunked(self._specular_fraction_chunk, (), PEC, ti, tr, ph)
+
+    def log_lobe_terms(self, theta_i, theta_r, phi=np.pi):
+        r"""Natural logarithms of the specular term :math:`\Gamma` (Eq. 204) and the diffuse factor ``D`` [1/sr].
+
+        ``log Gamma`` adds the logarithm of the Beckmann density,
+        :math:`-\tan^2\alpha/(2\sigma^2) - \log(2\pi\sigma^2)`, to that of the rest of Eq. 204, so it stays
+        finite where ``Gamma`` itself underflows (far from the lobe at small sigma). ``-inf`` where a term
+        vanishes exactly (shadowed facets; ``diffuse="none"``). Beckmann slopes only.
+
+        Returns
+        -------
+        (log_gamma, log_d) : ndarrays of the broadcast shape of the angles and ``sigma``.
+        """
+        if self.distribution is not None:
+            raise ValueError("log_lobe_terms needs Beckmann slopes (a model built from sigma)")
+        ti, tr, ph = check_angles(theta_i, theta_r, phi)
+        shape = np.broadcast_shapes(ti.shape, np.shape(self.sigma))
+        ti, tr, ph = (np.broadcast_to(a, shape) for a in (ti, tr, ph))
+        geo = facet_geometry(ti, tr, ph, checked=True)
+        finite = np.isfinite(geo.tan2_alpha)
+        t2 = np.where(finite, geo.tan2_alpha, 0.0)
+        s2 = self.sigma**2
+        with np.errstate(divide="ignore"):
+            log_gamma = np.log(self._gamma_over_pdf(geo)) - t2 / (2 * s2) - np.log(2 * np.pi * s2)
+            log_d = np.log(self._diffuse_factor(ti, tr))
+        return np.where(finite, log_gamma, -np.inf), log_d
 
     def _specular_fraction_chunk(self, eta, ti, tr, ph):
         if np.all(ph == np.pi):
