@@ -50,12 +50,18 @@ def crlb(n, kappa, sigma, theta_i, theta_r, noise, phi=np.pi, *, sigma_known: bo
     """Cramer-Rao lower bounds (standard deviations) of (n, kappa[, sigma]) -> (..., P); inf where unidentifiable."""
     info = fisher_information(n, kappa, sigma, theta_i, theta_r, noise, phi, sigma_known=sigma_known, **model_kw)
     P = info.shape[-1]
-    scale = np.sqrt(np.clip(np.diagonal(info, axis1=-2, axis2=-1), 1e-300, None))
-    corr = info / (scale[..., :, None] * scale[..., None, :])  # equilibrated: condition number of the shape
-    out = np.full(info.shape[:-1], np.inf)
-    cond = np.linalg.cond(corr)
-    ok = np.isfinite(cond) & (cond < 1e12)
-    if np.any(ok):
-        inv = np.linalg.inv(corr[ok]) / (scale[ok][:, :, None] * scale[ok][:, None, :])
-        out[ok] = np.sqrt(np.clip(np.diagonal(inv, axis1=-2, axis2=-1), 0, None))
+    flat = info.reshape(-1, P, P)
+    out = np.full(flat.shape[:-1], np.inf)
+    for i, I in enumerate(flat):
+        # a parameter the data do not touch (zero information, e.g. kappa at kappa = 0 where the DOLP is
+        # stationary) has an infinite bound and is left out of the inversion for the others
+        d = np.diagonal(I)
+        keep = d > 1e-300 * max(d.max(), 1e-300)
+        if not np.any(keep):
+            continue
+        sub = I[np.ix_(keep, keep)]
+        scale = np.sqrt(np.diagonal(sub))
+        corr = sub / np.outer(scale, scale)  # equilibrated: the condition number measures identifiability
+        if np.linalg.cond(corr) < 1e12:
+            out[i, keep] = np.sqrt(np.clip(np.diagonal(np.linalg.inv(corr)), 0, None)) / scale
     return out.reshape(info.shape[:-2] + (P,))
