@@ -1,0 +1,301 @@
+r"""Electric-field integral equation for TM (E_z) scattering by a perfect conductor (Eqs. 178-181).
+
+With time dependence exp(+j w t) and :math:`G(\mathbf r, \mathbf r') = -\frac{j}{4}H_0^{(2)}(k|\mathbf r - \mathbf r'|)`,
+the total field vanishes on the conductor and the unknown is :math:`U = \partial\psi/\partial n`
+(n out of the conductor), proportional to the surface current :math:`J_z = U/(j\omega\mu_0)`:
+
+.. math:: \psi_{inc}(\mathbf r) = \int_C G(\mathbf r, \mathbf r')\,U(\mathbf r')\,ds', \quad \mathbf r\in C
+   \qquad\text{(Eq. 178, up to the constant } \pi Z_0/2\lambda\text{)}
+
+Pulse basis and point matching (Eqs. 179-180): ``N`` pulses centred at the given points, of lengths
+:math:`\Delta s_n`. Matrix elements :math:`A_{mn} = -\frac j4\int_{C_n}H_0^{(2)}(kR_m(s))ds`:
+
+* diagonal: the exact integral over the straight pulse,
+  :math:`-\frac j4\frac2k\left[\int_0^{k\Delta s_n/2}J_0 - j\int_0^{k\Delta s_n/2}Y_0\right]` (``scipy.special.itj0y0``);
+  its small-argument expansion :math:`-\frac j4\Delta s_n[1 - \frac{2j}{\pi}\ln\frac{\gamma k\Delta s_n}{4e}]`
+  (:func:`self_term_small_argument`) is off by O((k ds)^2) -- 0.9 % excess energy at 10 points per wavelength;
+* neighbours (|m - n| = 1): 8-point Gauss-Legendre along the pulse's tangent;
+* near band (2 <= |m - n| <= 3 wavelengths): the corrected midpoint rule :math:`\Delta s[f + \Delta s^2 f''/24]`
+  with the exact second derivative of :math:`H_0^{(2)}(kR(s))` along the pulse;
+* others: the phase-corrected midpoint rule,
+  :math:`-\frac j4\Delta s_n H_0^{(2)}(kR_{mn})\,\mathrm{sinc}(k\Delta s_n\cos\alpha_{mn}/2)` with
+  :math:`\alpha_{mn}` the angle between the source pulse and :math:`\mathbf r_m - \mathbf r_n`: the exact
+  pulse integral of the outgoing phase. The plain midpoint rule is off by 1.7 % in every far element at 10
+  points per wavelength (measured against 16-point Gauss-Legendre), which shows up as 1.4 % excess energy.
+  :math:`H_0^{(2)} = J_0 - jY_0` is evaluated on one triangle (R is symmetric) without Python loops.
+
+Far field (Eq. 181): :math:`\psi_s \to \frac{j}{4}\sqrt{\frac{2}{\pi k\rho}}e^{-j(k\rho - \pi/4)}F(\theta_s)`,
+:math:`F(\theta_s) = \sum_n U_n\Delta s_n e^{jk(x_n\sin\theta_s + y_n\cos\theta_s)}` for direction
+:math:`(\sin\theta_s, \cos\theta_s)`; so :math:`2\pi\rho|\psi_s|^2 = |F|^2/(4k)` (the echo width of a unit
+plane wave) and :math:`\rho|\psi_s|^2 = |F|^2/(8\pi k)` per unit scattering angle, which divided by the
+incident power of a tapered wave is the scattering coefficient (integrates to 1 for a PEC).
+Physical optics (Kirchhoff): :math:`U = 2\,\partial\psi_{inc}/\partial n` on the lit side.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import linalg, special
+
+from scatterlab._checks import as_finite, as_positive
+
+__all__ = ["Contour", "contour", "impedance_matrix", "solve_tm", "Solution", "physical_optics_current"]
+
+EULER_GAMMA = np.exp(np.euler_gamma)
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
+_NEAR_OFFSETS = (1, -1)
+_BAND_WAVELENGTHS = 3.0  # corrected-midpoint band half-width (energy error < 5e-4 at 10 points per wavelength)
+
+
+@dataclass
+class Contour:
+    """Pulse centres (x, y) [m], lengths ds [m], unit tangents (tx, ty) and normals (nx, ny) out of the conductor."""
+
+    x: np.ndarray
+    y: np.ndarray
+    ds: np.ndarray
+    tx: np.ndarray
+    ty: np.ndarray
+    nx: np.ndarray
+    ny: np.ndarray
+    closed: bool
+
+    @property
+    def size(self) -> int:
+        return self.x.size
+
+
+def contour(x, y, closed: bool = False) -> Contour:
+    """Pulses centred at the points: an open profile (x increasing, conductor below) or a closed body
+    (counter-clockwise points). Lengths and tangents from central differences (periodic when closed)."""
+    x = as_finite(x, "x").astype(float).ravel()
+    y = as_finite(y, "y").astype(float).ravel()
+    if x.shape != y.shape or x.size < 4:
+        raise ValueError("x and y must be 1-D arrays of equal length (at least 4 points)")
+    if closed:
+        dx = (np.roll(x, -1) - np.roll(x, 1)) / 2
+        dy = (np.roll(y, -1) - np.roll(y, 1)) / 2
+        area2 = np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
+        if area2 <= 0:
+            raise ValueError("closed contour points must run counter-clockwise")
+    else:
+        if np.any(np.diff(x) <= 0):
+            raise ValueError("an open profile needs increasing x (a height function y(x))")
+        dx = np.gradient(x)
+        dy = np.gradient(y)
+    ds = np.hypot(dx, dy)
+    tx, ty = dx / ds, dy / ds
+    # open profile: conductor below, normal up = (-ty, tx); closed ccw body: outward = (ty, -tx)
+    nx, ny = (ty, -tx) if closed else (-ty, tx)
+    return Contour(x, y, ds, tx, ty, nx, ny, closed)
+
+
+def self_term_small_argument(k, ds):
+    """The textbook diagonal element (small-argument expansion of H0^(2)); kept to test the exact one against."""
+    return -0.25j * ds * (1 - 2j / np.pi * np.log(EULER_GAMMA * k * ds / (4 * np.e)))
+
+
+def _hankel2_0(z):
+    """H0^(2)(z) = J0 - jY0; for z >= 20 the Hankel asymptotic series to 1e-8 (3x cheaper than J0 and Y0)."""
+    z = np.asarray(z, float)
+    far = z >= 20.0
+    if not np.any(far):
+        return special.j0(z) - 1j * special.y0(z)
+    out = np.empty(z.shape, complex)
+    near = ~far
+    out[near] = special.j0(z[near]) - 1j * special.y0(z[near])
+    zf = z[far]
+    w = 1.0 / zf
+    w2 = w * w
+    P = 1 - w2 * (9 / 128 - w2 * (3675 / 32768))
+    Q = w * (-1 / 8 + w2 * (75 / 1024 - w2 * (59535 / 262144)))
+    ph = zf - np.pi / 4
+    amp = np.sqrt(2 / np.pi * w)
+    c, sn = np.cos(ph), np.sin(ph)
+    # sqrt(2/(pi z)) exp(-j(z - pi/4)) (P - jQ)
+    out[far] = amp * ((c * P - sn * Q) - 1j * (sn * P + c * Q))
+    return out
+
+
+def _sinc(u):
+    """sin(u)/u; a Taylor polynomial (error < 3e-9) for |u| <= 0.5, the usual 10 points per wavelength."""
+    if np.max(np.abs(u), initial=0.0) <= 0.5:
+        u2 = u * u
+        return 1 - u2 / 6 * (1 - u2 / 20 * (1 - u2 / 42))
+    return np.sinc(u / np.pi)
+
+
+def impedance_matrix(c: Contour, k: float) -> np.ndarray:
+    """The N x N MoM matrix A (module docstring), complex128."""
+    N = c.size
+    A = np.empty((N, N), complex)
+    # one triangle of kR (symmetric), in row blocks to bound the temporaries
+    block = max(1, int(4e6 // N))
+    for start in range(0, N, block):
+        stop = min(N, start + block)
+        rows = slice(start, stop)
+        DX = c.x[rows, None] - c.x[None, start:]
+        DY = c.y[rows, None] - c.y[None, start:]
+        R = np.hypot(DX, DY)
+        H = _hankel2_0(k * np.maximum(R, 1e-300))
+        R = np.maximum(R, 1e-300)
+        # integral of exp(-jkR) over a straight pulse: the phase-corrected midpoint rule, a factor
+        # sinc(k ds cos(a) / 2) with a the angle between the source pulse and R (observer m in the rows)
+        A[rows, start:] = H * _sinc(k / 2 * c.ds[None, start:] * (c.tx[None, start:] * DX + c.ty[None, start:] * DY) / R)
+        A[start:, rows] = (H * _sinc(k / 2 * c.ds[rows, None] * (c.tx[rows, None] * DX + c.ty[rows, None] * DY) / R)).T
+    A *= (-0.25j) * c.ds[None, :]
+    i = np.arange(N)
+    # self term: the exact integral over the straight pulse, 2/k [int_0^{k ds/2} J0 - j int_0^{k ds/2} Y0]
+    ij, iy = special.itj0y0(k * c.ds / 2)
+    A[i, i] = -0.25j * (2 / k) * (ij - 1j * iy)
+    # near band 2 <= |m - n| <= 3 wavelengths: the corrected midpoint rule h [f + h^2/24 f''], f(s) = H0(k R(s)),
+    # f'' = k^2 H0''(kR) R'^2 + k H0'(kR) R'' with H0' = -H1, H0'' = -H0 + H1/(kR), R' = cos(a), R'' = sin^2(a)/R
+    # (the 1/sqrt(R) amplitude times the phase leaves an error ~ k h^2 / (12 R) that sinc alone misses)
+    band = int(np.ceil(_BAND_WAVELENGTHS * 2 * np.pi / k / np.median(c.ds)))
+    for off in range(2, min(band, N - 1) + 1):
+        for sgn in (1, -1):
+            m = i if c.closed else i[max(0, -sgn * off):N - max(0, sgn * off)]
+            n = (m + sgn * off) % N
+            dx, dy = c.x[m] - c.x[n], c.y[m] - c.y[n]
+            R = np.hypot(dx, dy)
+            cos_a = -(c.tx[n] * dx + c.ty[n] * dy) / R  # dR/ds moving along the source pulse
+            z = k * R
+            h0 = _hankel2_0(z)
+            h1 = special.j1(z) - 1j * special.y1(z)
+            f2 = k * k * (-h0 + h1 / z) * cos_a**2 + k * (-h1) * (1 - cos_a**2) / R
+            A[m, n] = -0.25j * c.ds[n] * (h0 + c.ds[n] ** 2 / 24 * f2)
+    # neighbours: Gauss-Legendre over the source pulse along its tangent
+    for off in _NEAR_OFFSETS:
+        m = i[max(0, -off):N - max(0, off)] if not c.closed else i
+        n = (m + off) % N
+        s = 0.5 * c.ds[n][:, None] * _GL_X[None, :]
+        px = c.x[n][:, None] + c.tx[n][:, None] * s
+        py = c.y[n][:, None] + c.ty[n][:, None] * s
+        R = np.hypot(c.x[m][:, None] - px, c.y[m][:, None] - py)
+        A[m, n] = -0.25j * 0.5 * c.ds[n] * np.sum(_GL_W * _hankel2_0(k * R), axis=1)
+    return A
+
+
+def physical_optics_current(c: Contour, incidence, k: float) -> np.ndarray:
+    """Kirchhoff current U = 2 d(psi_inc)/dn (lit side; zero where the incident wave grazes away)."""
+    U = 2 * incidence.normal_derivative(c.x, c.y, c.nx, c.ny, k)
+    if hasattr(incidence, "direction"):
+        d = incidence.direction()
+        U = np.where(d[0] * c.nx + d[1] * c.ny < 0, U, 0.0)
+    return U
+
+
+@dataclass
+class Solution:
+    """Surface unknowns U = d psi / dn for one or several incidences.
+
+    Attributes
+    ----------
+    contour : Contour
+    k : float [rad/m]
+    current : ndarray (N,) or (N, K) -- U at the pulse centres (per incidence in columns).
+    incidences : list
+    residual : ndarray (K,) -- relative residual ||A U - psi_inc|| / ||psi_inc|| of the solve.
+    timings : dict -- seconds for "fill" and "solve".
+    """
+
+    contour: Contour
+    k: float
+    current: np.ndarray
+    incidences: list
+    residual: np.ndarray
+    timings: dict = field(default_factory=dict)
+    solver: str = "lu"
+
+    def far_field(self, theta_s) -> np.ndarray:
+        """F(theta_s) (S,) or (S, K): sum_n U_n ds_n exp(jk(x_n sin + y_n cos)); theta_s [rad] from the vertical."""
+        th = np.atleast_1d(np.asarray(theta_s, float))
+        c = self.contour
+        sx, sy = np.sin(th)[:, None], np.cos(th)[:, None]
+        phase = np.exp(1j * self.k * (sx * c.x[None, :] + sy * c.y[None, :]))
+        # exact integral of the plane-wave factor over each straight pulse (Eq. 181's integral over C'_n)
+        phase = phase * _sinc(self.k / 2 * (sx * c.tx[None, :] + sy * c.ty[None, :]) * c.ds[None, :])
+        U = self.current if self.current.ndim == 2 else self.current[:, None]
+        F = phase @ (U * c.ds[:, None])
+        F = F if self.current.ndim == 2 else F[:, 0]
+        return F if np.ndim(theta_s) else F[0]
+
+    def echo_width(self, theta_s) -> np.ndarray:
+        """2-D bistatic cross-section |F|^2 / (4k) [m] (closed bodies under a unit plane wave)."""
+        return np.abs(self.far_field(theta_s)) ** 2 / (4 * self.k)
+
+    def scattering_coefficient(self, theta_s) -> np.ndarray:
+        """|F|^2 / (8 pi k P_inc) [1/rad]: integrates to 1 over theta_s in (-90, 90) deg for a lossless surface.
+
+        Needs tapered incidences (they carry a finite power).
+        """
+        P = np.array([inc.incident_power(self.k) for inc in self.incidences])
+        F2 = np.abs(self.far_field(theta_s)) ** 2
+        P = P if self.current.ndim == 2 else P[0]
+        return F2 / (8 * np.pi * self.k * P)
+
+
+def solve_tm(x, y, wavelength, incidence, closed: bool = False, *, solver: str = "lu", tol: float = 1e-6,
+             max_iter: int = 50, block: int = 256, min_points_per_wavelength: float = 5.0) -> Solution:
+    """Solve the TM EFIE on a PEC contour for one incidence or a list (one factorisation for all).
+
+    Parameters
+    ----------
+    x, y : array (N,) [m] -- contour points (open profile with increasing x, or closed counter-clockwise).
+    wavelength : float [m]
+    incidence : PlaneWave, TaperedWave or a list of them (multiple right-hand sides).
+    closed : bool
+    solver : "lu" (LAPACK through scipy, factorised once) or "fb" (block forward-backward, Holliday et al.,
+        with fallback to LU when it diverges or stalls; see :func:`scatterlab.mom.solvers.forward_backward`).
+    tol, max_iter, block : forward-backward controls.
+    min_points_per_wavelength : sampling below this (longest pulse) raises ValueError; a median pulse longer
+        than 1/8 wavelength warns.
+
+    Returns
+    -------
+    Solution
+    """
+    import time
+    import warnings
+
+    from scatterlab.mom.solvers import forward_backward
+
+    wavelength = float(as_positive(wavelength, "wavelength"))
+    k = 2 * np.pi / wavelength
+    c = contour(x, y, closed)
+    ppw = wavelength / np.max(c.ds)
+    if ppw < min_points_per_wavelength:
+        raise ValueError(f"sampling of {ppw:.2f} points per wavelength (longest pulse) is below "
+                         f"{min_points_per_wavelength:g}: use a finer dx (at least 10 per wavelength recommended)")
+    typical = wavelength / np.median(c.ds)
+    if typical < 8:
+        warnings.warn(f"only {typical:.1f} points per wavelength (median pulse): expect errors of several percent",
+                      stacklevel=2)
+    incs = list(incidence) if isinstance(incidence, (list, tuple)) else [incidence]
+    length = (c.x[-1] - c.x[0]) * c.size / (c.size - 1) if not closed else None  # N pulses of dx
+    for inc in incs:
+        if hasattr(inc, "check"):
+            inc.check(k, length)
+    t0 = time.perf_counter()
+    A = impedance_matrix(c, k)
+    t_fill = time.perf_counter() - t0
+    V = np.stack([inc.field(c.x, c.y, k) for inc in incs], axis=1)
+    t0 = time.perf_counter()
+    used = solver
+    if solver == "lu":
+        U = linalg.lu_solve(linalg.lu_factor(A, overwrite_a=False, check_finite=False), V, check_finite=False)
+    elif solver == "fb":
+        U, info = forward_backward(A, V, tol=tol, max_iter=max_iter, block=block)
+        if not info["converged"]:
+            warnings.warn(f"forward-backward did not converge ({info['reason']}); falling back to LU", stacklevel=2)
+            U = linalg.lu_solve(linalg.lu_factor(A, check_finite=False), V, check_finite=False)
+            used = "lu (fallback)"
+    else:
+        raise ValueError(f"solver must be 'lu' or 'fb', got {solver!r}")
+    t_solve = time.perf_counter() - t0
+    res = np.linalg.norm(A @ U - V, axis=0) / np.linalg.norm(V, axis=0)
+    single = not isinstance(incidence, (list, tuple))
+    return Solution(contour=c, k=k, current=U[:, 0] if single else U, incidences=incs, residual=res,
+                    timings={"fill": t_fill, "solve": t_solve}, solver=used)

@@ -1,0 +1,53 @@
+r"""Iterative solver for the rough-surface EFIE: block forward-backward (Holliday, DeRaad and St-Cyr, 1998).
+
+Forward-backward computes the current in a forward sweep along the surface (each unknown from the already
+updated ones before it and the previous iterate after it) followed by a backward sweep: symmetric
+Gauss-Seidel. Here the sweeps go over blocks of ``block`` unknowns, each block solved with its own LU
+(block size 1 is Holliday's original). For rough surfaces at moderate grazing the coupling is dominated by the
+forward and backward propagating parts, and a few iterations reach 1e-6. Stopping: the relative residual
+``||A U - V|| / ||V||`` below ``tol``; divergence: the residual grows for two iterations in a row or exceeds
+1e3 -- the caller falls back to LU.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import linalg
+
+__all__ = ["forward_backward"]
+
+
+def forward_backward(A, V, *, tol: float = 1e-6, max_iter: int = 50, block: int = 256):
+    """Solve ``A U = V`` (V: (N,) or (N, K)); returns (U, info) with info keys converged, iterations,
+    residuals, reason."""
+    N = A.shape[0]
+    V2 = V if V.ndim == 2 else V[:, None]
+    starts = list(range(0, N, block))
+    blocks = [slice(s, min(N, s + block)) for s in starts]
+    lus = [linalg.lu_factor(A[b, b], check_finite=False) for b in blocks]
+    U = np.zeros_like(V2, dtype=complex)
+    norm_v = np.linalg.norm(V2, axis=0)
+    residuals = []
+    info = {"converged": False, "iterations": 0, "residuals": residuals, "reason": "max_iter reached"}
+    for it in range(max_iter):
+        for bi, b in enumerate(blocks):  # forward sweep
+            rhs = V2[b] - A[b, :b.start] @ U[:b.start] - A[b, b.stop:] @ U[b.stop:]
+            U[b] = linalg.lu_solve(lus[bi], rhs, check_finite=False)
+        for bi in range(len(blocks) - 1, -1, -1):  # backward sweep
+            b = blocks[bi]
+            rhs = V2[b] - A[b, :b.start] @ U[:b.start] - A[b, b.stop:] @ U[b.stop:]
+            U[b] = linalg.lu_solve(lus[bi], rhs, check_finite=False)
+        r = float(np.max(np.linalg.norm(A @ U - V2, axis=0) / norm_v))
+        residuals.append(r)
+        info["iterations"] = it + 1
+        if not np.isfinite(r) or r > 1e3:
+            info["reason"] = f"diverged (residual {r:.3g})"
+            break
+        if r < tol:
+            info["converged"] = True
+            info["reason"] = "converged"
+            break
+        if len(residuals) >= 3 and residuals[-1] > residuals[-2] > residuals[-3]:
+            info["reason"] = f"diverging (residual rose twice, now {r:.3g})"
+            break
+    return (U if V.ndim == 2 else U[:, 0]), info
