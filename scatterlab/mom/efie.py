@@ -34,6 +34,7 @@ Physical optics (Kirchhoff): :math:`U = 2\,\partial\psi_{inc}/\partial n` on the
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -98,25 +99,8 @@ def self_term_small_argument(k, ds):
 
 
 def _hankel2_0(z):
-    """H0^(2)(z) = J0 - jY0; for z >= 20 the Hankel asymptotic series to 1e-8 (3x cheaper than J0 and Y0)."""
-    z = np.asarray(z, float)
-    far = z >= 20.0
-    if not np.any(far):
-        return special.j0(z) - 1j * special.y0(z)
-    out = np.empty(z.shape, complex)
-    near = ~far
-    out[near] = special.j0(z[near]) - 1j * special.y0(z[near])
-    zf = z[far]
-    w = 1.0 / zf
-    w2 = w * w
-    P = 1 - w2 * (9 / 128 - w2 * (3675 / 32768))
-    Q = w * (-1 / 8 + w2 * (75 / 1024 - w2 * (59535 / 262144)))
-    ph = zf - np.pi / 4
-    amp = np.sqrt(2 / np.pi * w)
-    c, sn = np.cos(ph), np.sin(ph)
-    # sqrt(2/(pi z)) exp(-j(z - pi/4)) (P - jQ)
-    out[far] = amp * ((c * P - sn * Q) - 1j * (sn * P + c * Q))
-    return out
+    """H0^(2)(z) = J0 - jY0 (Cephes; Hankel's asymptotic series in numpy measured no faster)."""
+    return special.j0(z) - 1j * special.y0(z)
 
 
 def _sinc(u):
@@ -127,14 +111,27 @@ def _sinc(u):
     return np.sinc(u / np.pi)
 
 
-def impedance_matrix(c: Contour, k: float) -> np.ndarray:
-    """The N x N MoM matrix A (module docstring), complex128."""
+def _fill_far(A, c, k, block):
+    """H0^(2)(kR) times the pulse's phase factor into A, one triangle of R per row block.
+
+    Row blocks write disjoint parts of A (rows [s, e) x columns >= s and its transpose), so they run on
+    threads: numpy's ufuncs release the GIL (measured 1.7x on 2 cores).
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
     N = c.size
-    A = np.empty((N, N), complex)
-    # one triangle of kR (symmetric), in row blocks to bound the temporaries
-    block = max(1, int(4e6 // N))
-    for start in range(0, N, block):
-        stop = min(N, start + block)
+    starts = range(0, N, block)
+    workers = min(len(starts), os.cpu_count() or 1)
+    if workers > 1:
+        with ThreadPoolExecutor(workers) as pool:
+            list(pool.map(lambda s0: _fill_block(A, c, k, s0, min(N, s0 + block)), starts))
+    else:
+        for s0 in starts:
+            _fill_block(A, c, k, s0, min(N, s0 + block))
+
+
+def _fill_block(A, c, k, start, stop):
+    with np.errstate(all="ignore"):  # the diagonal (R = 0) is garbage here and overwritten later
         rows = slice(start, stop)
         DX = c.x[rows, None] - c.x[None, start:]
         DY = c.y[rows, None] - c.y[None, start:]
@@ -145,6 +142,15 @@ def impedance_matrix(c: Contour, k: float) -> np.ndarray:
         # sinc(k ds cos(a) / 2) with a the angle between the source pulse and R (observer m in the rows)
         A[rows, start:] = H * _sinc(k / 2 * c.ds[None, start:] * (c.tx[None, start:] * DX + c.ty[None, start:] * DY) / R)
         A[start:, rows] = (H * _sinc(k / 2 * c.ds[rows, None] * (c.tx[rows, None] * DX + c.ty[rows, None] * DY) / R)).T
+
+
+def impedance_matrix(c: Contour, k: float) -> np.ndarray:
+    """The N x N MoM matrix A (module docstring), complex128."""
+    N = c.size
+    A = np.empty((N, N), complex)
+    # one triangle of kR (symmetric), in row blocks to bound the temporaries
+    block = max(16, int(-(-N // (4 * (os.cpu_count() or 1)))) if N * N < 4e7 else max(1, int(1e6 // N)))
+    _fill_far(A, c, k, block)
     A *= (-0.25j) * c.ds[None, :]
     i = np.arange(N)
     # self term: the exact integral over the straight pulse, 2/k [int_0^{k ds/2} J0 - j int_0^{k ds/2} Y0]
