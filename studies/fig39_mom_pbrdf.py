@@ -8,7 +8,8 @@ is Eq. 177 (sigma = 0.3, PEC) in the specular plane, times cos(theta_s) (power p
 coefficient). As in the figure both are normalised to their values at the specular angle. In absolute units the MoM scattering coefficient (integrating to 1) is compared with the
 1-D geometric-optics version of the same facet model (the pBRDF describes two-dimensional roughness, so its
 absolute F00 [1/sr] is not the 1-D surface's [1/rad]):
-sigma_GO = p(tan a) cos(theta_i - a) / (2 cos^3 a cos theta_i), a = (theta_s - theta_i)/2, unshadowed.
+sigma_GO = p(tan a) cos(theta_i - a) / (2 cos^3 a cos theta_i), a = (theta_i - theta_s)/2, unshadowed
+(facets lit at the local incidence theta_i - a = (theta_i + theta_s)/2; integrates to about 1).
 """
 
 import sys
@@ -31,7 +32,7 @@ THETA_I = np.radians([10, 30, 45, 60, 75])
 
 
 def go_1d(theta_i, theta_s, slope):
-    a = (theta_s - theta_i) / 2
+    a = (theta_i - theta_s) / 2  # facet tilt that reflects theta_i into theta_s; local incidence theta_i - a
     t = np.tan(a)
     p = np.exp(-t * t / (2 * slope**2)) / (np.sqrt(2 * np.pi) * slope)
     return p * np.maximum(np.cos(theta_i - a), 0.0) / (2 * np.cos(a) ** 3 * np.cos(theta_i))  # unlit facets: 0
@@ -78,8 +79,8 @@ def run(ctx):
             "peak_deg_pbrdf": float(np.degrees(theta_s[np.argmax(f00)])),
             "peak_deg_go1d": float(np.degrees(theta_s[np.argmax(go)])),
             "peak_height_mom": float(mom.max()), "peak_height_go1d": float(go.max()),
-            "rms_log10_ratio_normalised_pbrdf": float(np.sqrt(np.mean(np.log10((mom / mom[spec]) / (f00 / f00[spec]))[lobe] ** 2))),
-            "rms_log10_ratio_absolute_go1d": float(np.sqrt(np.mean(np.log10(mom / go)[lobe] ** 2))),
+            "rms_log10_ratio_normalised_pbrdf": float(np.sqrt(np.mean(np.log10((mom[lobe] / mom[spec]) / (f00[lobe] / f00[spec])) ** 2))),
+            "rms_log10_ratio_absolute_go1d": float(np.sqrt(np.mean(np.log10(mom[lobe] / go[lobe]) ** 2))),
             "energy_mean": float(res.energy[:, j].mean()), "max_relative_stderr_in_lobe": float(np.max((se / mom)[lobe])),
         }
     axes[0].set(xlabel=r"$\theta_s$ [deg]", ylabel="normalised to specular", ylim=(1e-3, 30),
