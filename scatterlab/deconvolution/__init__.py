@@ -1,0 +1,15 @@
+"""Polarimetric blind deconvolution, DOLP priors and material classification (Ch. V-VII, Eqs. 185-198).
+
+* :func:`blind_deconvolve` -- EM (LeMaster-Cain / Schulz) for S0, DOLP, AOP and the PSFs;
+* :mod:`priors` -- super-Gaussian DOLP priors (Eq. 195), the MAP DOLP update (Eq. 196), adaptive priors;
+* classification: several priors given to :func:`blind_deconvolve` label each pixel by the prior whose
+  update maximizes the objective; :func:`classification_errors` scores a label map like Table 4.
+"""
+
+from scatterlab.deconvolution.classify import classification_errors
+from scatterlab.deconvolution.em import DeconvolutionResult, blind_deconvolve, evenly_spaced
+from scatterlab.deconvolution.priors import (PRIOR_SETS, SuperGaussianPrior, adaptive_priors, dolp_update,
+                                             dolp_update_companion, map_objective)
+
+__all__ = ["blind_deconvolve", "DeconvolutionResult", "evenly_spaced", "SuperGaussianPrior", "PRIOR_SETS",
+           "dolp_update", "dolp_update_companion", "adaptive_priors", "map_objective", "classification_errors"]
