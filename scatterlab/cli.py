@@ -5,6 +5,7 @@
     scatterlab study list
     scatterlab study run ID [--quick] [--out DIR] [--seed N] [--force]
     scatterlab study run all [--quick] [--out DIR]
+    scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
 
 Sweeps inside studies use ``--workers N`` local processes or a Dask cluster
 given by ``--scheduler ADDRESS``.
@@ -59,6 +60,26 @@ def _study(args) -> int:
         ex.close()
 
 
+def _characterize(args) -> int:
+    from scatterlab.characterization import characterize, default_scene, load_scene
+
+    try:
+        cfg = load_scene(args.scene) if args.scene else default_scene()
+        if args.quick:  # a small, fast version of the same scene (tests, smoke runs)
+            cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = 48, cfg.geometry_deg[::3], cfg.d_over_r0[:1]
+            cfg.iterations, cfg.posterior_steps = 15, 400
+        ex = _executor(args)
+        try:
+            report = characterize(cfg, args.out, overwrite=args.force, executor=ex)
+        finally:
+            ex.close()
+    except (ValueError, FileExistsError, FileNotFoundError) as exc:
+        print(f"scatterlab: {exc}", file=sys.stderr)
+        return 2
+    print(f"report: {report}")
+    return 0
+
+
 def main(argv=None) -> int:
     """Entry point of the ``scatterlab`` command; returns the exit status."""
     parser = argparse.ArgumentParser(prog="scatterlab", description=__doc__.split("\n")[0])
@@ -72,9 +93,18 @@ def main(argv=None) -> int:
     st.add_argument("--force", action="store_true", help="replace an existing report")
     st.add_argument("--workers", type=int, default=None, help="local worker processes for sweeps")
     st.add_argument("--scheduler", default=None, help="Dask scheduler address for sweeps")
+    ch = sub.add_parser("characterize", help="simulate, deconvolve, classify and characterize a scene (main job)")
+    ch.add_argument("scene", nargs="?", help="scene description (TOML); default: the bundled painted plates")
+    ch.add_argument("--out", default="results/characterize", help="output folder")
+    ch.add_argument("--force", action="store_true", help="replace an existing report")
+    ch.add_argument("--quick", action="store_true", help="smaller images, fewer geometries and iterations")
+    ch.add_argument("--workers", type=int, default=None, help="local worker processes")
+    ch.add_argument("--scheduler", default=None, help="Dask scheduler address")
     args = parser.parse_args(argv)
     if args.command == "study":
         return _study(args)
+    if args.command == "characterize":
+        return _characterize(args)
     return 2  # pragma: no cover
 
 
