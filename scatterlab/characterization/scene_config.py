@@ -34,7 +34,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 
 __all__ = ["SceneConfig", "default_scene", "load_scene"]
 

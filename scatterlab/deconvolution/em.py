@@ -10,8 +10,9 @@ E-step (Eq. 193): with :math:`r_n = d_n / i_n` and the back-projection :math:`c_
 :math:`\sum_y\psi_{un} = \tfrac12(1 - \mathcal P)S_0 c_n` and :math:`\sum_y\psi_{pn} = \mathcal P S_0\cos^2(\alpha - \theta_n)c_n`.
 M-step (Eq. 194), for polarizer angles evenly spaced over 180 deg (Eqs. 159-160 decouple the updates):
 
-* :math:`S_0 \leftarrow \frac2K\sum_n(\psi_{un} + \psi_{pn}) / w`, w the fraction of the object pixel's light
-  that falls in the measured window (1 with periodic boundaries);
+* :math:`S_0 \leftarrow \sum_n(\psi_{un} + \psi_{pn}) / \sum_n w_n[\tfrac12(1 - \mathcal P) + \mathcal P\cos^2(\alpha - \theta_n)]`
+  (:math:`\frac2K\sum_n(\psi_{un} + \psi_{pn})` for evenly spaced angles and no boundary loss), w_n the share
+  of the object pixel's light that falls in the measured window (1 with periodic boundaries);
 * :math:`\mathcal P \leftarrow Q/T` (ML) or the root of Eq. 196 with a super-Gaussian prior
   (:mod:`scatterlab.deconvolution.priors`); with several priors each pixel takes the one whose update
   maximizes the complete-data objective -- the classification (Ch. V, VI);
@@ -43,7 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from scatterlab.deconvolution.priors import SuperGaussianPrior, dolp_update, map_objective
+from scatterlab.deconvolution.priors import dolp_update, map_objective
 
 __all__ = ["blind_deconvolve", "DeconvolutionResult", "evenly_spaced"]
 
@@ -234,11 +235,11 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
         if update_object:
             T = (U + Pp).sum(0)
             Qp = Pp.sum(0)
-            # Reeves: an object pixel near the edge sends only part of its light into the measured window,
-            # w = h^T * 1_window (1 for periodic boundaries); S0 = T / (w K / 2)
-            w = ops.corr(ops.extend(np.ones((1, H, W))), Hf)[0 if Hf.shape[0] == 1 else slice(None)]
-            w = np.mean(w, 0) if w.ndim == 3 else w
-            s0_new = 2.0 / K * T / np.clip(w, 1e-6, None)
+            # S0 = T / sum_n w_n [(1 - P)/2 + P cos^2], w_n = h_n^T * 1_window the share of an object pixel's
+            # light that reaches the measured window (Reeves; 1 for periodic boundaries); K/2 w for evenly
+            # spaced angles and a shared PSF
+            w = 1.0 if ops.pad == 0 else np.clip(ops.corr(ops.extend(np.ones((1, H, W))), Hf), 1e-6, None)
+            s0_new = T / np.sum(w * (0.5 * (1 - P) + P * cos2), axis=0)
             if not priors:
                 P_new = dolp_update(T, Qp)
             else:
@@ -286,7 +287,6 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
         loglik.append(L_new)
         obj = L_new
         if priors:
-            T_ = ops.crop(s0) * K / 2
             obj += float(np.sum([np.sum(np.where(classes == k, prior_weight * pr.log_pdf(ops.crop(P)), 0.0))
                                  for k, pr in enumerate(priors)]))
         objective.append(obj)
@@ -302,7 +302,6 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
 def _aop_mstep(B, th):
     """alpha maximizing sum_n B_n ln cos^2(alpha - theta_n) per pixel: 1-deg grid, parabolic refinement."""
     grid = np.radians(np.arange(-90, 90, 1.0))
-    best = None
     vals = []
     for g in grid:
         vals.append(np.sum(B * np.log(np.maximum(np.cos(g - th[:, None, None]) ** 2, 1e-300)), 0))
@@ -314,8 +313,7 @@ def _aop_mstep(B, th):
     fp = np.take_along_axis(vals, kp[None], 0)[0]
     den = fm - 2 * f0 + fp
     shift = np.where(den < 0, 0.5 * (fm - fp) / np.where(den < 0, den, -1.0), 0.0)
-    best = grid[k] + np.clip(shift, -0.5, 0.5) * np.radians(1.0)
-    return best
+    return grid[k] + np.clip(shift, -0.5, 0.5) * np.radians(1.0)
 
 
 def _resample_psf(h, shape):

@@ -30,7 +30,7 @@ import warnings
 import numpy as np
 from scipy import integrate, special
 
-from scatterlab._checks import as_finite, as_positive
+from scatterlab._checks import as_positive
 
 __all__ = ["STRUCTURE_CONSTANT", "PSD_CONSTANT", "kolmogorov_psd", "von_karman_psd", "phase_psd", "fried_parameter", "rytov_variance",
            "rytov_variance_from_r0", "phase_screen", "SlidingScreen", "remove_piston_tilt",

@@ -28,6 +28,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from scatterlab._checks import as_angle
+from scatterlab.fresnel import _refraction_term
 from scatterlab.pbrdf import Model
 from scatterlab.pbrdf.geometry import facet_geometry
 
@@ -43,9 +44,7 @@ def _facet_dolp_inplane(n, kappa, cos_beta, *, gradient: bool):
     c = cos_beta
     c2 = c * c
     s2 = 1 - c2
-    d = (eta.real - 1) * (eta.real + 1) - eta.imag**2 + c2  # Re(eta^2 - s^2), cancellation-free
-    u = np.sqrt(d + 2j * eta.real * eta.imag)
-    u = np.abs(u.real) - 1j * np.abs(u.imag)  # the branch A - jB with A, B >= 0 (AB = n kappa), also on the cut
+    u = _refraction_term(eta, c2)  # A - jB, A, B >= 0, cancellation-free (errata to Eq. 49)
     u = np.where(np.abs(u) < 1e-12, 1e-12, u)  # n = sin(beta), kappa = 0: branch point, keep the slope finite
     eta2 = eta * eta
     ds = c + u

@@ -47,7 +47,7 @@ import functools
 
 import numpy as np
 
-from scatterlab._checks import as_index, broadcast
+from scatterlab._checks import as_index
 from scatterlab.fresnel import _refraction_term
 from scatterlab.pbrdf import dhr as _dhr
 from scatterlab.pbrdf.distributions import Beckmann, FacetDistribution

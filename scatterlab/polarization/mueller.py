@@ -23,7 +23,6 @@ from __future__ import annotations
 import numpy as np
 
 from scatterlab._checks import as_finite, as_positive, broadcast
-from scatterlab.polarization import jones as _jones
 
 __all__ = [
     "jones_to_mueller",

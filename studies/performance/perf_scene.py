@@ -4,7 +4,6 @@ channels, noise, Stokes estimate) on this machine; goal: under a second (issue 7
 import sys
 from pathlib import Path
 
-import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parents[1]))
 from _common import plt  # noqa: E402

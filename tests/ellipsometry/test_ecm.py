@@ -1,6 +1,5 @@
 """ECM against known truth: simulated imperfect instruments with known W and A."""
 
-import warnings
 
 import numpy as np
 import pytest

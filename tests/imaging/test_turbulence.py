@@ -1,10 +1,8 @@
 """Turbulence: spectra and screens against independent truths (closed forms, quadrature of the spectrum)."""
 
-import warnings
 
 import numpy as np
 import pytest
-from scipy import special
 
 from scatterlab.imaging import turbulence as T
 
