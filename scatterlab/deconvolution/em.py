@@ -43,6 +43,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.fft as sfft
 
 from scatterlab.deconvolution.priors import dolp_update, map_objective
 
@@ -79,22 +80,31 @@ class DeconvolutionResult:
 
 
 class _Ops:
-    """FFT convolution on the object grid, with the data window (Reeves) or periodic."""
+    """FFT convolution on the object grid (scipy.fft, real transforms), with the data window (Reeves) or
+    periodic. The spectrum of the window indicator is cached: the share of an object pixel's light that reaches
+    the window costs one inverse transform per PSF change."""
 
     def __init__(self, data_shape, pad, boundary):
         self.H, self.W = data_shape
         self.pad = pad if boundary == "reeves" else 0
         self.shape = (self.H + 2 * self.pad, self.W + 2 * self.pad)
         self.win = (slice(self.pad, self.pad + self.H), slice(self.pad, self.pad + self.W))
+        self._win_spec = self.rfft(self.extend(np.ones((self.H, self.W)))) if self.pad else None
+
+    def rfft(self, a):
+        return sfft.rfft2(a)
+
+    def irfft(self, A):
+        return sfft.irfft2(A, s=self.shape)
 
     def otf(self, h):
-        return np.fft.rfft2(np.fft.ifftshift(h, axes=(-2, -1)))
+        return self.rfft(sfft.ifftshift(h, axes=(-2, -1)))
 
-    def conv(self, o, Hf):
-        return np.fft.irfft2(np.fft.rfft2(o) * Hf, s=self.shape)
-
-    def corr(self, r, Hf):
-        return np.fft.irfft2(np.fft.rfft2(r) * np.conj(Hf), s=self.shape)
+    def window_share(self, Hf):
+        """h^T * 1_window on the object grid (1 for periodic boundaries)."""
+        if not self.pad:
+            return 1.0
+        return np.clip(self.irfft(self._win_spec * np.conj(Hf)), 1e-6, None)
 
     def crop(self, a):
         return a[(..., *self.win)]
@@ -204,42 +214,32 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
     if estimate_aop:
         alpha = 0.5 * np.arctan2(S[2], S[1])
     alpha = _pad_edge(alpha, ops.pad)
-    cos2 = np.cos(alpha[None] - th[:, None, None]) ** 2  # (K, Hp, Wp)
 
     D = d.sum(axis=(-2, -1))
     classes = None
     priors = tuple(priors) if priors else ()
     loglik, objective = [], []
-
-    def forward(h_, s0_, P_, cos2_):
-        Hf = ops.otf(h_)
-        o = 0.5 * (1 - P_) * s0_ + P_ * s0_ * cos2_  # (K, Hp, Wp)
-        i = ops.crop(ops.conv(o, Hf if Hf.shape[0] == K else Hf[[0] * K]))
-        return o, i, Hf
+    # one PSF and a known AOP (Ch. VII's specular case): the channel objects are linear in the Stokes images,
+    # o_n = (S0 + S1 cos 2theta_n + S2 sin 2theta_n) / 2, so 2 (3 if sin 2alpha != 0) transforms replace K
+    # in every convolution, and the PSF update reuses their spectra
+    model = (_StokesBasis if shared_psf and not estimate_aop else _PerChannel)(ops, th, alpha)
 
     def likelihood(i):
-        i = np.maximum(i, 1e-300)
-        return float(np.sum(np.where(d > 0, d * np.log(i), 0.0) - i))
+        # d ln i - i; where d = 0 the clipped log is finite, so the product is exactly 0
+        return float(np.vdot(d, np.log(np.maximum(i, 1e-300))) - i.sum())
 
-    o, i, Hf = forward(h, s0, P, cos2)
-    loglik.append(likelihood(i))
+    state = model.forward(h, s0, P)
+    loglik.append(likelihood(state.i))
     objective.append(loglik[-1])
+    w = ops.window_share(state.Hf)
     it = 0
     for it in range(1, iterations + 1):
-        r = np.where(i > 0, d / np.maximum(i, 1e-300), 0.0)
-        R = ops.extend(r)  # zero outside the measured window (Reeves)
-        Hk = Hf if Hf.shape[0] == K else Hf[[0] * K]
-        c = ops.corr(R, Hk)  # back-projection (K, Hp, Wp)
-        U = 0.5 * (1 - P) * s0 * c  # sum_y psi_un per channel
-        Pp = P * s0 * cos2 * c       # sum_y psi_pn
+        r = np.divide(d, state.i, out=np.zeros_like(d), where=state.i > 0)
+        T, Qp, Pp, R = model.estep(state, r, s0, P)
         if update_object:
-            T = (U + Pp).sum(0)
-            Qp = Pp.sum(0)
-            # S0 = T / sum_n w_n [(1 - P)/2 + P cos^2], w_n = h_n^T * 1_window the share of an object pixel's
-            # light that reaches the measured window (Reeves; 1 for periodic boundaries); K/2 w for evenly
-            # spaced angles and a shared PSF
-            w = 1.0 if ops.pad == 0 else np.clip(ops.corr(ops.extend(np.ones((1, H, W))), Hf), 1e-6, None)
-            s0_new = T / np.sum(w * (0.5 * (1 - P) + P * cos2), axis=0)
+            # S0 = T / sum_n w_n [(1 - P)/2 + P cos^2(alpha - theta_n)], w_n = h_n^T * 1_window the share of an
+            # object pixel's light that reaches the measured window (Reeves; 1 for periodic boundaries)
+            s0_new = T / model.s0_denominator(w, P)
             if not priors:
                 P_new = dolp_update(T, Qp)
             else:
@@ -249,17 +249,14 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
                 P_new = np.take_along_axis(cands, cls[None], 0)[0]
                 classes = ops.crop(cls)
             if estimate_aop:
-                B = Pp  # weights of ln cos^2(alpha - theta_n)
-                alpha = _aop_mstep(B, th)
+                model.set_aop(_aop_mstep(Pp, th))  # weights of ln cos^2(alpha - theta_n)
         else:
             s0_new, P_new = s0, P
         # PSF update (Eq. 194): h <- h (r * o) / D, per channel or summed for a shared PSF
         if psf_mode != "fixed":
-            num = np.fft.irfft2(np.fft.rfft2(R) * np.conj(np.fft.rfft2(o)), s=ops.shape)  # correlation r * o
-            num = np.fft.fftshift(num, axes=(-2, -1))
+            num = sfft.fftshift(model.psf_correlation(state, R), axes=(-2, -1))
             if shared_psf:
-                h_em = h[0] * num.sum(0) / D.sum()
-                h_em = h_em[None]
+                h_em = (h[0] * num.sum(0) / D.sum())[None]
             else:
                 h_em = h * num / D[:, None, None]
             h_em = np.where(support, np.clip(h_em, 0, None), 0.0)
@@ -272,18 +269,18 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
                 h_new = h_em
         else:
             h_new = h
-        cos2_new = np.cos(alpha[None] - th[:, None, None]) ** 2 if estimate_aop else cos2
-        o_new, i_new, Hf_new = forward(h_new, s0_new, P_new, cos2_new)
-        L_new = likelihood(i_new)
+        new_state = model.forward(h_new, s0_new, P_new, Hf=state.Hf if h_new is h else None)
+        L_new = likelihood(new_state.i)
         if psf_mode == "pupil" and L_new < loglik[-1]:
             # Schulz: the pupil-projected PSF step is kept only if the objective increased
-            o_new, i_new, Hf_new = forward(h, s0_new, P_new, cos2_new)
-            L_new = likelihood(i_new)
             h_new = h
+            new_state = model.forward(h, s0_new, P_new, Hf=state.Hf)
+            L_new = likelihood(new_state.i)
         elif psf_mode == "pupil":
             pupil_phase = pupil_phase_new
-        h, s0, P, cos2 = h_new, s0_new, P_new, cos2_new
-        o, i, Hf = o_new, i_new, Hf_new
+        if h_new is not h:
+            w = ops.window_share(new_state.Hf)
+        h, s0, P, state = h_new, s0_new, P_new, new_state
         loglik.append(L_new)
         obj = L_new
         if priors:
@@ -292,11 +289,87 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
         objective.append(obj)
         if tol is not None and abs(loglik[-1] - loglik[-2]) <= tol * abs(loglik[-2]):
             break
+    alpha = model.alpha
     aop_out = ops.crop(alpha) if np.ndim(alpha) else np.full((H, W), float(alpha))
     return DeconvolutionResult(s0=ops.crop(s0), dolp=np.clip(ops.crop(P), 0, 1), aop=aop_out, psfs=h,
                                classes=classes, priors=priors, loglik=np.array(loglik),
                                objective=np.array(objective), iterations=it, notes=notes,
                                seconds=time.perf_counter() - t0)
+
+
+@dataclass
+class _State:
+    """Predicted channel images i (K, H, W), the OTF(s) and the spectra the PSF update reuses."""
+
+    i: np.ndarray
+    Hf: np.ndarray
+    spectra: np.ndarray
+
+
+class _StokesBasis:
+    """Shared PSF, known AOP: o_n = sum_j A_nj B_j with B = (S0, P S0 cos 2alpha, P S0 sin 2alpha) and
+    A_n = (1, cos 2theta_n, sin 2theta_n) / 2 (the third term dropped when sin 2alpha = 0 everywhere)."""
+
+    def __init__(self, ops, th, alpha):
+        self.ops, self.alpha = ops, alpha
+        c2a, s2a = np.cos(2 * alpha), np.sin(2 * alpha)
+        self.J = 3 if np.any(np.abs(s2a) > 1e-12) else 2
+        self.trig = np.stack([c2a, s2a])[: self.J - 1]  # (J - 1, Hp, Wp)
+        self.A = 0.5 * np.stack([np.ones_like(th), np.cos(2 * th), np.sin(2 * th)], axis=1)[:, : self.J]  # (K, J)
+        self.sum_trig = (2 * self.A[:, 1:]).sum(0)  # sum_n (cos 2theta_n, sin 2theta_n)
+
+    def forward(self, h, s0, P, Hf=None):
+        Hf = self.ops.otf(h[0]) if Hf is None else Hf
+        B = np.concatenate([s0[None], (P * s0)[None] * self.trig])  # (J, Hp, Wp)
+        Bf = self.ops.rfft(B)
+        blurred = self.ops.crop(self.ops.irfft(Bf * Hf))
+        return _State(np.tensordot(self.A, blurred, axes=1), Hf, Bf)
+
+    def estep(self, state, r, s0, P):
+        R = self.ops.rfft(self.ops.extend(np.tensordot(2 * self.A.T, r, axes=1)))  # spectra of combined ratios
+        C = self.ops.irfft(R * np.conj(state.Hf))  # their back-projections (J, Hp, Wp)
+        pol = C[0] + np.sum(self.trig * C[1:], axis=0)  # sum_n 2 cos^2(alpha - theta_n) c_n
+        T = 0.5 * s0 * ((1 - P) * C[0] + P * pol)
+        Qp = 0.5 * P * s0 * pol
+        return T, Qp, None, R
+
+    def s0_denominator(self, w, P):
+        K = self.A.shape[0]
+        return w * (0.5 * K + 0.5 * P * np.tensordot(self.sum_trig, self.trig, axes=1))
+
+    def psf_correlation(self, state, R):
+        return self.ops.irfft(0.5 * np.sum(R * np.conj(state.spectra), axis=0))[None]
+
+
+class _PerChannel:
+    """One PSF per channel, or an AOP to estimate: the K channel objects are convolved one by one."""
+
+    def __init__(self, ops, th, alpha):
+        self.ops, self.th = ops, th
+        self.set_aop(alpha)
+
+    def set_aop(self, alpha):
+        self.alpha = alpha
+        self.cos2 = np.cos(alpha[None] - self.th[:, None, None]) ** 2  # (K, Hp, Wp)
+
+    def forward(self, h, s0, P, Hf=None):
+        Hf = self.ops.otf(h) if Hf is None else Hf
+        o = 0.5 * (1 - P) * s0 + P * s0 * self.cos2  # (K, Hp, Wp)
+        Of = self.ops.rfft(o)
+        return _State(self.ops.crop(self.ops.irfft(Of * Hf)), Hf, Of)
+
+    def estep(self, state, r, s0, P):
+        R = self.ops.rfft(self.ops.extend(r))
+        c = self.ops.irfft(R * np.conj(state.Hf))  # back-projection (K, Hp, Wp)
+        Pp = P * s0 * self.cos2 * c  # sum_y psi_pn
+        T = (0.5 * (1 - P) * s0 * c + Pp).sum(0)
+        return T, Pp.sum(0), Pp, R
+
+    def s0_denominator(self, w, P):
+        return np.sum(w * (0.5 * (1 - P) + P * self.cos2), axis=0)
+
+    def psf_correlation(self, state, R):
+        return self.ops.irfft(R * np.conj(state.spectra))  # r_n correlated with o_n
 
 
 def _aop_mstep(B, th):
