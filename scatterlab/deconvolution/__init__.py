@@ -6,10 +6,12 @@
   update maximizes the objective; :func:`classification_errors` scores a label map like Table 4.
 """
 
-from scatterlab.deconvolution.classify import classification_errors
-from scatterlab.deconvolution.em import DeconvolutionResult, blind_deconvolve, evenly_spaced
+from scatterlab.deconvolution.classify import classification_errors, classify_dolp
+from scatterlab.deconvolution.em import (DeconvolutionResult, blind_deconvolve, evenly_spaced, initial_psf,
+                                         object_grid)
 from scatterlab.deconvolution.priors import (PRIOR_SETS, SuperGaussianPrior, adaptive_priors, dolp_update,
                                              dolp_update_companion, map_objective)
 
 __all__ = ["blind_deconvolve", "DeconvolutionResult", "evenly_spaced", "SuperGaussianPrior", "PRIOR_SETS",
-           "dolp_update", "dolp_update_companion", "adaptive_priors", "map_objective", "classification_errors"]
+           "dolp_update", "dolp_update_companion", "adaptive_priors", "map_objective", "classification_errors",
+           "classify_dolp", "initial_psf", "object_grid"]

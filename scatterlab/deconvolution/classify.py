@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["classification_errors"]
+__all__ = ["classification_errors", "classify_dolp"]
 
 
 def classification_errors(estimate, truth, *, metal_classes=(1,), mask=None) -> dict:
@@ -22,3 +22,15 @@ def classification_errors(estimate, truth, *, metal_classes=(1,), mask=None) -> 
     return {"false_metal": float(np.sum(e & ~t) / n), "false_dielectric": float(np.sum(~e & t) / n),
             "total_error": float(np.sum(e != t) / n), "correlation": corr,
             "rmse": float(np.sqrt(np.mean((ef - tf) ** 2)))}
+
+
+def classify_dolp(dolp, priors) -> np.ndarray:
+    """Label each pixel with the prior of largest density at its DOLP (argmax_k ln Pi_k(P)): the DOLP
+    thresholding of the no-turbulence and degraded images in Ch. V, whose thresholds are the DOLPs of equal
+    prior probability (0.30 for the Ch. V priors). ``dolp`` any shape; returns int labels (index into priors)."""
+    P = np.asarray(dolp, float)
+    if not priors:
+        raise ValueError("priors must list at least one SuperGaussianPrior")
+    with np.errstate(over="ignore"):
+        logs = np.stack([np.nan_to_num(pr.log_pdf(P), nan=-np.inf, neginf=-np.inf) for pr in priors])
+    return np.argmax(logs, axis=0)

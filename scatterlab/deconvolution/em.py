@@ -47,7 +47,7 @@ import scipy.fft as sfft
 
 from scatterlab.deconvolution.priors import dolp_update, map_objective
 
-__all__ = ["blind_deconvolve", "DeconvolutionResult", "evenly_spaced"]
+__all__ = ["blind_deconvolve", "DeconvolutionResult", "evenly_spaced", "initial_psf", "object_grid"]
 
 
 def evenly_spaced(angles) -> bool:
@@ -240,14 +240,14 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
             # S0 = T / sum_n w_n [(1 - P)/2 + P cos^2(alpha - theta_n)], w_n = h_n^T * 1_window the share of an
             # object pixel's light that reaches the measured window (Reeves; 1 for periodic boundaries)
             s0_new = T / model.s0_denominator(w, P)
-            if not priors:
-                P_new = dolp_update(T, Qp)
-            else:
-                cands = np.stack([dolp_update(T, Qp, pr, prior_weight) for pr in priors])
-                objs = np.stack([map_objective(cands[k], T, Qp, pr, prior_weight) for k, pr in enumerate(priors)])
-                cls = np.argmax(objs, axis=0)
-                P_new = np.take_along_axis(cands, cls[None], 0)[0]
-                classes = ops.crop(cls)
+            P_new = dolp_update(T, Qp)
+            if priors:
+                # the priors classify the measured pixels; the Reeves border (never observed) keeps the ML update
+                Tw, Qw = ops.crop(T), ops.crop(Qp)
+                cands = np.stack([dolp_update(Tw, Qw, pr, prior_weight) for pr in priors])
+                objs = np.stack([map_objective(cands[k], Tw, Qw, pr, prior_weight) for k, pr in enumerate(priors)])
+                classes = np.argmax(objs, axis=0)
+                P_new[ops.win] = np.take_along_axis(cands, classes[None], 0)[0]
             if estimate_aop:
                 model.set_aop(_aop_mstep(Pp, th))  # weights of ln cos^2(alpha - theta_n)
         else:
@@ -387,6 +387,34 @@ def _aop_mstep(B, th):
     den = fm - 2 * f0 + fp
     shift = np.where(den < 0, 0.5 * (fm - fp) / np.where(den < 0, den, -1.0), 0.0)
     return grid[k] + np.clip(shift, -0.5, 0.5) * np.radians(1.0)
+
+
+def initial_psf(pupil, shape, d_over_r0: float = 10.0, rng=None) -> np.ndarray:
+    """The initial PSF of Sec. 5.3.2: the PSF of one random Kolmogorov phase screen (D/r0 = 10 by default)
+    over ``pupil`` (n, n), piston and tilt removed, centred on the object grid ``shape`` (Hp, Wp), unit sum.
+    A start as wide as the turbulence lets the multiplicative EM PSF update grow where the diffraction-limited
+    PSF is nearly zero."""
+    from scatterlab.imaging import phase_screen, psf, remove_piston_tilt
+
+    A = np.asarray(pupil, float)
+    if A.ndim != 2 or A.shape[0] != A.shape[1]:
+        raise ValueError(f"pupil must be a square 2-D array, got shape {A.shape}")
+    if not d_over_r0 > 0:
+        raise ValueError(f"d_over_r0 must be > 0, got {d_over_r0}")
+    n = A.shape[0]
+    diameter = 2 * np.sqrt((A > 0).sum() / np.pi)  # pupil diameter [grid samples]
+    phase = remove_piston_tilt(phase_screen(n, 1.0, diameter / d_over_r0, np.random.default_rng(rng)), A > 0)
+    return _resample_psf(psf(A, phase, pad=2), shape)
+
+
+def object_grid(data_shape, psf_radius=None, boundary: str = "reeves", pad=None) -> tuple:
+    """Shape (Hp, Wp) of the object grid :func:`blind_deconvolve` uses for ``data_shape`` (H, W)."""
+    H, W = data_shape
+    if psf_radius is None:
+        psf_radius = min(H, W) / 4
+    if pad is None:
+        pad = int(np.ceil(psf_radius)) if boundary == "reeves" else 0
+    return (H + 2 * pad, W + 2 * pad) if boundary == "reeves" else (H, W)
 
 
 def _resample_psf(h, shape):

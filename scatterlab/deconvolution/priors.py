@@ -66,55 +66,98 @@ def map_objective(P, T, Q, prior: SuperGaussianPrior | None, weight: float = 1.0
     return out
 
 
-def _f_scaled(P, t, q, a, c3, m):
-    """f(P) / T, with t = 1, q = Q/T and a = w m c2^m / T."""
-    return a * P * (P - 1) * (P - c3) ** (m - 1) - P + q
+def _ipow(x, k: int):
+    """x**k for a small positive integer k by repeated squaring (float ** int calls pow() per element)."""
+    out, base = None, x
+    while k:
+        if k & 1:
+            out = base if out is None else out * base
+        k >>= 1
+        if k:
+            base = base * base
+    return out
+
+
+def _f_scaled(P, q, a, c3, m):
+    """f(P) / T with q = Q/T and a = w m c2^m / T."""
+    return a * P * (P - 1) * _ipow(P - c3, m - 1) - P + q
 
 
 def dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1.0) -> np.ndarray:
     """MAP (or, without a prior, ML: Q/T) DOLP update for every pixel; arrays broadcast; result in [0, 1].
 
     Pixels with T = 0 (no photons) keep P = 0 for the ML update and the prior's centre with a prior.
+    Bracket: with g(P) = a P (P - 1) (P - c3)^(m-1), g >= 0 on [0, c3] and g <= 0 on [c3, 1], so a root
+    (g = P - q) lies between q and c3 and nowhere else (P = 0 too when q = 0), and f(min) >= 0 >= f(max).
+    Every sign change of f on 9 points spanning [min(q, c3), max(q, c3)] is bracketed, all brackets of all
+    pixels are solved together by Newton steps safeguarded by bisection (a step leaving the bracket is replaced
+    by a halving) to 1e-13, and where a pixel has several roots the one of largest objective is kept.
     """
     T = np.asarray(T, float)
     Q = np.clip(np.asarray(Q, float), 0.0, None)
+    T, Q = np.broadcast_arrays(T, Q)
     empty = T <= 0
     Ts = np.where(empty, 1.0, T)
     q = np.clip(Q / Ts, 0.0, 1.0)
     if prior is None:
         return np.where(empty, 0.0, q)
-    m, c3 = prior.m, prior.c3
+    m, c3 = prior.m, float(np.clip(prior.c3, 0.0, 1.0))
     # a few photons against c2^m ~ 1e15: the prior dominates; the cap keeps f finite (a P (P-1) (P-c3)^9 <= 1e200)
-    a = np.minimum(weight * m * prior.c2**m / np.maximum(Ts, 1e-150), 1e200)
-    # bisection on [0, 1]: f(0) = q >= 0, f(1) = q - 1 <= 0; also bracket each sign change on a coarse grid so
-    # that every admissible root is found, then keep the best by the objective
-    grid = np.linspace(0.0, 1.0, 33)
-    fg = _f_scaled(grid[:, None], 1.0, q.ravel()[None, :], a.ravel()[None, :], c3, m)
-    best_P = np.zeros(q.size)
-    best_obj = np.full(q.size, -np.inf)
-    for j in range(grid.size - 1):
-        change = (fg[j] >= 0) & (fg[j + 1] <= 0) | (fg[j] <= 0) & (fg[j + 1] >= 0)
-        if not np.any(change):
-            continue
-        idx = np.flatnonzero(change)
-        lo = np.full(idx.size, grid[j])
-        hi = np.full(idx.size, grid[j + 1])
-        flo = fg[j, idx]
-        qa, aa = q.ravel()[idx], a.ravel()[idx]
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            fm = _f_scaled(mid, 1.0, qa, aa, c3, m)
-            left = np.sign(fm) == np.sign(flo)
-            lo = np.where(left, mid, lo)
-            flo = np.where(left, fm, flo)
-            hi = np.where(left, hi, mid)
-        P = 0.5 * (lo + hi)
-        obj = map_objective(P, 1.0, qa, prior, np.minimum(weight / np.maximum(Ts.ravel()[idx], 1e-200), 1e200))
-        better = obj > best_obj[idx]
-        best_P[idx[better]] = P[better]
-        best_obj[idx[better]] = obj[better]
-    out = best_P.reshape(q.shape)
-    return np.where(empty, np.clip(c3, 0, 1), out)
+    a = np.minimum(weight * m * prior.c2**m / np.maximum(Ts, 1e-150), 1e200).ravel()
+    qf = q.ravel()
+    lo_b, hi_b = np.minimum(qf, c3), np.maximum(qf, c3)
+    t = np.linspace(0.0, 1.0, 9)[:, None]
+    xs = lo_b + (hi_b - lo_b) * t  # (17, pixels)
+    fg = _f_scaled(xs, qf, a, c3, m)
+    ends = np.flatnonzero((fg[0] == 0) | (hi_b == lo_b))  # q = 0 (or q = c3): the end point itself is a root
+    # at q = 0 f leaves the root P = 0 with the sign of f'(0) = a c3^(m-1) - 1: bracket from there
+    fg[0] = np.where(fg[0] == 0, a * c3 ** (m - 1) - 1, fg[0])
+    neg = np.signbit(fg)
+    j, idx = np.nonzero(neg[:-1] != neg[1:])  # bracket j of pixel idx (f = +0 counts as positive)
+    P = _safeguarded_newton(xs[j, idx], xs[j + 1, idx], fg[j, idx], qf[idx], a[idx], c3, m)
+    idx, P = np.r_[idx, ends], np.r_[P, lo_b[ends]]
+    out = np.full(qf.size, np.nan)
+    counts = np.bincount(idx, minlength=qf.size)
+    single = counts[idx] == 1
+    out[idx[single]] = P[single]
+    multi = ~single
+    if np.any(multi):
+        im, Pm = idx[multi], P[multi]
+        obj = map_objective(Pm, 1.0, qf[im], prior, np.minimum(weight / np.maximum(Ts.ravel()[im], 1e-200), 1e200))
+        order = np.lexsort((obj, im))  # per pixel, the root of largest objective comes last
+        last = np.r_[im[order][1:] != im[order][:-1], True]
+        out[im[order][last]] = Pm[order][last]
+    out = np.where(np.isnan(out), qf, out).reshape(q.shape)  # no bracket: cannot happen (f(min) >= 0 >= f(max))
+    return np.where(empty, c3, out)
+
+
+def _safeguarded_newton(lo, hi, flo, q, a, c3, m, tol=1e-13, max_iter=100):
+    """Roots of f (:func:`_f_scaled`) in the brackets [lo, hi] (f(lo) has the sign of ``flo``); vectorised
+    Newton with bisection fallback, iterating only on the unconverged brackets."""
+    lo, hi, flo = lo.copy(), hi.copy(), flo.copy()
+    x = 0.5 * (lo + hi)
+    active = np.arange(x.size)
+    for _ in range(max_iter):
+        if not active.size:
+            break
+        xa, la, ha, qa_, aa = x[active], lo[active], hi[active], q[active], a[active]
+        u = xa - c3
+        um2 = _ipow(u, m - 2) if m > 2 else np.ones_like(u)
+        um1 = um2 * u
+        f = aa * xa * (xa - 1) * um1 - xa + qa_
+        df = aa * ((2 * xa - 1) * um1 + (m - 1) * xa * (xa - 1) * um2) - 1
+        same = np.sign(f) == np.sign(flo[active])
+        la = np.where(same, xa, la)
+        ha = np.where(same, ha, xa)
+        flo[active] = np.where(same, f, flo[active])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xn = xa - f / df
+        bad = ~np.isfinite(xn) | (xn <= la) | (xn >= ha)
+        xn = np.where(bad, 0.5 * (la + ha), xn)
+        done = (np.abs(xn - xa) <= tol) | (ha - la <= tol) | (f == 0)
+        x[active], lo[active], hi[active] = np.where(f == 0, xa, xn), la, ha
+        active = active[~done]
+    return x
 
 
 def dolp_update_companion(T, Q, prior: SuperGaussianPrior, weight: float = 1.0) -> float:

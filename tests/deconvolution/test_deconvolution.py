@@ -170,3 +170,29 @@ def test_angles_and_bad_input():
         blind_deconvolve(d, ANGLES_0_45_90_135, psf_mode="fixed")
     with pytest.raises(ValueError, match="even"):
         SuperGaussianPrior(3.0, 0.5, m=9)
+
+
+def test_prior_thresholds_and_initial_psf():
+    """classify_dolp reproduces the Ch. V threshold (P < 0.30 metal, the DOLP of equal prior probability);
+    the Sec. 5.3.2 start PSF has unit sum and is wider than the diffraction-limited PSF."""
+    from scatterlab.deconvolution import classify_dolp, initial_psf, object_grid
+    from scatterlab.imaging import circular_pupil, psf
+
+    ch5 = PRIOR_SETS["ch5"]  # (dielectric, metal)
+    np.testing.assert_array_equal(classify_dolp([0.0, 0.2, 0.29, 0.31, 0.6, 1.0], ch5), [1, 1, 1, 0, 0, 0])
+    # three classes (Ch. VI): aluminium near 0.035, iron near 0.185, dielectric above
+    np.testing.assert_array_equal(classify_dolp([0.02, 0.19, 0.7], PRIOR_SETS["ch6"]), [1, 2, 0])
+    pupil = circular_pupil(32, 16)
+    shape = object_grid((64, 64))
+    h0 = initial_psf(pupil, shape, rng=1)
+    assert h0.shape == shape == (96, 96) and np.isclose(h0.sum(), 1.0) and h0.min() >= 0
+    yy, xx = np.mgrid[0:96, 0:96] - 48
+
+    def spread(h):
+        return np.sqrt(np.sum(h * (yy**2 + xx**2)) / h.sum())
+
+    from scatterlab.deconvolution.em import _resample_psf
+
+    assert spread(h0) > 2 * spread(_resample_psf(psf(pupil, pad=2), shape))
+    with pytest.raises(ValueError, match="d_over_r0"):
+        initial_psf(pupil, shape, d_over_r0=0)
