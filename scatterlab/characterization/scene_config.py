@@ -5,13 +5,14 @@ Keys (units in the names; all optional except where noted):
 ```toml
 title = "painted aluminium and steel, 1550 nm"
 wavelength_um = 1.55
-image_size = 96                       # pixels (square), the pupil grid is half of it
+image_size = 128                      # pixels (square), the pupil grid is half of it
 geometry_deg = [30, 35, 40, 45, 50, 55, 60]   # specular theta_i = theta_r per acquisition (Ch. VII)
 d_over_r0 = [7.9, 12.9]               # turbulence strengths; a no-turbulence case is always included
-photons = 20000                       # expected photo-electrons at the brightest channel pixel
+photons = 100000                      # expected photo-electrons at the brightest channel pixel (full well)
 read_noise = 10.0                     # e- rms
 polarizer_deg = [0, 45, 90, 135]
-iterations = 40                       # EM iterations per acquisition
+iterations = 150                      # EM iterations per acquisition
+psf_model = "pupil"                   # PSF update: "pupil" (Schulz, GS steps) or "em" (non-parametric, Eq. 194)
 priors = "ch7"                        # DOLP prior set for the classification (ch5, ch6, ch7) or "none"
 estimate = ["classes", "n_kappa", "posterior"]   # what to compute (leave out what is not needed)
 sigma_known = 0.3                     # roughness used by the n, kappa inversion (the reference measured it)
@@ -55,13 +56,14 @@ class Plate:
 class SceneConfig:
     title: str = "painted aluminium and steel plates, 1550 nm (Figs. 49-61)"
     wavelength_um: float = 1.55
-    image_size: int = 96
+    image_size: int = 128
     geometry_deg: list = field(default_factory=lambda: [30, 35, 40, 45, 50, 55, 60])
     d_over_r0: list = field(default_factory=lambda: [7.9, 12.9])
-    photons: float = 2e4
+    photons: float = 1e5
     read_noise: float = 10.0
     polarizer_deg: list = field(default_factory=lambda: [0, 45, 90, 135])
-    iterations: int = 40
+    iterations: int = 150
+    psf_model: str = "pupil"
     priors: str = "ch7"
     estimate: list = field(default_factory=lambda: list(ESTIMATES))
     sigma_known: float = 0.3
@@ -80,6 +82,10 @@ class SceneConfig:
             raise ValueError("photons must be > 0 and read_noise >= 0")
         if len(self.polarizer_deg) < 3:
             raise ValueError("polarizer_deg needs at least three angles")
+        if self.psf_model not in ("em", "pupil"):
+            raise ValueError(f"psf_model must be 'em' or 'pupil', got {self.psf_model!r}")
+        if self.iterations < 1:
+            raise ValueError(f"iterations must be >= 1, got {self.iterations}")
         if self.priors not in ("ch5", "ch6", "ch7", "none"):
             raise ValueError("priors must be one of ch5, ch6, ch7, none")
         bad = set(self.estimate) - set(ESTIMATES)

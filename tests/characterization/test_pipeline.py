@@ -21,15 +21,17 @@ def test_pipeline_writes_results_and_report(tmp_path):
 
     report = characterize(tiny(), tmp_path)
     text = report.read_text()
-    assert "aluminium plate" in text and "DOLP RMSE" in text
+    assert "aluminium plate" in text and "DOLP RMSE" in text and "Table 5" in text
     with h5py.File(tmp_path / "results.h5") as f:
-        g = f["aluminium/D_r0_7.9/theta_35"]
-        assert g["dolp_corrected"].shape == (32, 32) and "classes" in g
-        assert f["aluminium/no_turbulence/n_corrected"].shape == (32, 32)
-        assert f["aluminium/no_turbulence/posterior_paint/chain"].shape[-1] == 3
-        assert np.all(np.diff(g["loglik"][()]) >= -1e-9 * np.abs(g["loglik"][1:]))
+        g = f["aluminium/theta_35/D_r0_7.9"]
+        assert g["dolp_corrected"].shape == (32, 32) and "classes_corrected" in g and "psf_corrected" in g
+        assert "dolp_corrected" not in f["aluminium/theta_35/no_turbulence"]  # the reference is not deconvolved
+        assert f["aluminium/D_r0_7.9_corrected/n"].shape == (32, 32)
+        assert f["aluminium/D_r0_7.9_corrected/posterior_paint/chain"].shape[-1] == 3
+        L = g["loglik_corrected"][()]
+        assert np.all(np.diff(L) >= -1e-9 * np.abs(L[1:]))
     s = json.loads((tmp_path / "summary.json").read_text())
-    assert set(s["plates"]["aluminium"]) == {"no_turbulence", "D_r0_7.9"}
+    assert set(s["plates"]["aluminium"]) == {"no_turbulence", "D_r0_7.9_degraded", "D_r0_7.9_corrected"}
     assert not (tmp_path / "results.h5.part").exists()
     with pytest.raises(FileExistsError):
         characterize(tiny(), tmp_path)
@@ -40,8 +42,8 @@ def test_only_requested_estimates_are_computed(tmp_path):
 
     characterize(tiny(estimate=["classes"]), tmp_path)
     with h5py.File(tmp_path / "results.h5") as f:
-        assert "n_corrected" not in f["aluminium/no_turbulence"]
-        assert "posterior_paint" not in f["aluminium/no_turbulence"]
+        assert "no_turbulence" not in f["aluminium"]  # no n, kappa maps and no posteriors
+        assert "classes_corrected" in f["aluminium/theta_35/D_r0_7.9"]
 
 
 def test_scene_files_are_validated(tmp_path):
@@ -58,3 +60,36 @@ def test_scene_files_are_validated(tmp_path):
     p.write_text('priors = "ch9"\n')
     with pytest.raises(ValueError, match="priors"):
         load_scene(p)
+
+
+def test_keystone_registration_recovers_object_coordinates_and_shifts():
+    """Foreshortening by cos(theta) and its inverse stretch bring a label map back (up to the half-pixel
+    rounding of nearest-neighbour sampling); phase correlation finds a sub-pixel translation."""
+    from scatterlab.characterization.registration import (apply_shift, estimate_shift, foreshorten,
+                                                         keystone_correct, register)
+    from scatterlab.imaging import painted_plate
+
+    labels = painted_plate(128, scratches=0).labels
+    for deg in (30.0, 60.0):
+        th = np.radians(deg)
+        cam = foreshorten(labels, th)
+        # the letters look narrower by cos(theta) along the plane of incidence
+        assert abs((cam > 0).sum() / (labels > 0).sum() - np.cos(th)) < 0.03
+        back = np.rint(keystone_correct(cam.astype(float), th, order=0)).astype(int)
+        assert np.mean(back != labels) < 0.03
+    rng = np.random.default_rng(0)
+    img = np.fft.irfft2(np.fft.rfft2(rng.random((64, 64))) * np.exp(-0.02 * np.add.outer(
+        np.fft.fftfreq(64) ** 2 * 4096, np.fft.rfftfreq(64) ** 2 * 4096)), s=(64, 64))
+    true = np.array([3.3, -5.6])
+    moved = np.fft.irfft2(np.fft.rfft2(img) * np.exp(-2j * np.pi * np.add.outer(
+        np.fft.fftfreq(64) * true[0], np.fft.rfftfreq(64) * true[1])), s=(64, 64))
+    est = estimate_shift(img, moved)
+    np.testing.assert_allclose(est, -true, atol=0.15)
+    aligned = apply_shift(moved, est)
+    assert np.sqrt(np.mean((aligned - img)[10:-10, 10:-10] ** 2)) < 0.2 * img.std()
+    s0, others, shift = register(moved, np.stack([moved, moved]), 0.0, reference=img)
+    np.testing.assert_allclose(shift, est) and np.testing.assert_allclose(others[0], s0)
+    with pytest.raises(ValueError, match="theta_r"):
+        keystone_correct(img, np.radians(89.5))
+    with pytest.raises(ValueError, match="same shape"):
+        estimate_shift(img, img[:10])

@@ -1,0 +1,110 @@
+r"""Registration of multi-angle images onto object coordinates (Ch. VII: keystone stretch, then translation).
+
+A plate seen at :math:`\theta_r` from far away is foreshortened by :math:`\cos\theta_r` along the plane of
+incidence (the far-field limit of the keystone distortion the reference mentions): the camera pixel at
+:math:`x_c` sees the object point :math:`x = x_c/\cos\theta_r`, the other axis unchanged. Images of several
+geometries are brought to common object coordinates by the inverse stretch, then aligned by the translation
+(turbulent tilt, pointing) estimated by cross-correlation with sub-pixel parabolic refinement.
+
+Axes: images are ``(..., H, W)``; the plane of incidence is along ``W`` (columns); the stretch is about the
+image centre.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+__all__ = ["foreshorten", "keystone_correct", "estimate_shift", "apply_shift", "register"]
+
+
+def _check_theta(theta_r):
+    theta_r = float(theta_r)
+    if not 0 <= theta_r < np.radians(89.0):
+        raise ValueError(f"theta_r must be in [0, 89) deg for registration, got {np.degrees(theta_r):.3g} deg")
+    return theta_r
+
+
+def _column_coordinates(W, factor):
+    c = (W - 1) / 2
+    return c + (np.arange(W) - c) * factor
+
+
+def foreshorten(labels, theta_r) -> np.ndarray:
+    """Object-coordinate label map ``(H, W)`` -> what a distant camera at ``theta_r`` [rad] sees (nearest
+    neighbour; columns beyond the map repeat its edge, the plate being larger than the field)."""
+    labels = np.asarray(labels)
+    H, W = labels.shape[-2:]
+    x = np.clip(np.rint(_column_coordinates(W, 1 / np.cos(_check_theta(theta_r)))), 0, W - 1).astype(int)
+    return labels[..., x]
+
+
+def keystone_correct(image, theta_r, order: int = 1) -> np.ndarray:
+    """Camera image(s) ``(..., H, W)`` at ``theta_r`` [rad] -> object coordinates (same shape): column x of the
+    result samples the camera at ``x cos(theta_r)`` about the centre (spline of ``order``; 1 keeps DOLP in
+    [0, 1] and counts non-negative)."""
+    img = np.asarray(image, float)
+    H, W = img.shape[-2:]
+    xc = _column_coordinates(W, np.cos(_check_theta(theta_r)))
+    flat = img.reshape((-1, H, W))
+    rows, cols = np.meshgrid(np.arange(H, dtype=float), xc, indexing="ij")
+    out = [ndimage.map_coordinates(f, [rows, cols], order=order, mode="nearest") for f in flat]
+    return np.stack(out).reshape(img.shape)
+
+
+def estimate_shift(reference, image, max_shift=None) -> np.ndarray:
+    """Translation ``(dy, dx)`` [pixels] that, applied to ``image`` (:func:`apply_shift`), best aligns it with
+    ``reference`` (both ``(H, W)``): the peak of their cross-correlation within ``max_shift`` (default a quarter
+    of the smaller side), refined by a parabola per axis. Plain rather than phase correlation: the images
+    compared are blurred to different degrees, and whitening would weight their noisiest frequencies most."""
+    a = np.asarray(reference, float)
+    b = np.asarray(image, float)
+    if a.shape != b.shape or a.ndim != 2:
+        raise ValueError(f"reference {a.shape} and image {b.shape} must be 2-D images of the same shape")
+    max_shift = min(a.shape) / 4 if max_shift is None else float(max_shift)
+    c = np.fft.irfft2(np.fft.rfft2(a - a.mean()) * np.conj(np.fft.rfft2(b - b.mean())), s=a.shape)
+    size = np.array(c.shape)
+    lag = [np.where(np.arange(n) > n / 2, np.arange(n) - n, np.arange(n)) for n in c.shape]
+    allowed = (np.abs(lag[0])[:, None] <= max_shift) & (np.abs(lag[1])[None, :] <= max_shift)
+    peak = np.array(np.unravel_index(np.argmax(np.where(allowed, c, -np.inf)), c.shape))
+    shift = peak.astype(float)
+    for ax in (0, 1):
+        idx = [peak[0], peak[1]]
+        vals = []
+        for d in (-1, 0, 1):
+            idx[ax] = (peak[ax] + d) % size[ax]
+            vals.append(c[tuple(idx)])
+        den = vals[0] - 2 * vals[1] + vals[2]
+        if den < 0:
+            shift[ax] += 0.5 * (vals[0] - vals[2]) / den
+    return np.where(shift > size / 2, shift - size, shift)
+
+
+def apply_shift(image, shift, order: int = 1) -> np.ndarray:
+    """Translate image(s) ``(..., H, W)`` by ``shift = (dy, dx)`` [pixels] (edges repeated)."""
+    img = np.asarray(image, float)
+    flat = img.reshape((-1,) + img.shape[-2:])
+    out = [ndimage.shift(f, shift, order=order, mode="nearest") for f in flat]
+    return np.stack(out).reshape(img.shape)
+
+
+def register(s0, others, theta_r, reference=None):
+    """Keystone-correct one acquisition and align it with ``reference``.
+
+    Parameters
+    ----------
+    s0 : array (H, W) -- the irradiance image used to estimate the translation.
+    others : array (..., H, W) -- images carried along (DOLP, classes as floats, ...).
+    theta_r : float [rad] -- observation angle of the acquisition.
+    reference : array (H, W), optional -- object-coordinate image to align with (none: no translation).
+
+    Returns
+    -------
+    s0_reg (H, W), others_reg (..., H, W), shift (2,) [pixels]
+    """
+    s0c = keystone_correct(s0, theta_r)
+    oc = keystone_correct(others, theta_r)
+    if reference is None:
+        return s0c, oc, np.zeros(2)
+    shift = estimate_shift(reference, s0c)
+    return apply_shift(s0c, shift), apply_shift(oc, shift), shift
