@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The two set-up commands of the README.
 
-    python3 tasks.py demo   # main job: create .venv, install scatterlab, run the main study
+    python3 tasks.py demo   # main job: create .venv, install scatterlab, run the default characterization
     python3 tasks.py test   # tests:    create .venv, install scatterlab[test], run pytest
 
 Each creates the virtual environment ``.venv`` beside this file when missing and
@@ -46,9 +46,11 @@ def ensure_env(extras: str) -> None:
 
 
 def demo(args) -> int:
+    """The main job: the default characterization (simulate -> deconvolve/classify -> n, kappa -> report)."""
     ensure_env("")
-    out = ROOT / "results" / "demo"
-    return _run(BIN / "scatterlab", "study", "run", "fig4", "--out", out, "--force", *args)
+    out = ROOT / "results" / "characterize"
+    workers = str(os.cpu_count() or 1)
+    return _run(BIN / "scatterlab", "characterize", "--out", out, "--force", "--workers", workers, *args)
 
 
 def test(args) -> int:

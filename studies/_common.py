@@ -117,3 +117,26 @@ def mueller_figure_study(ctx, eta, sigma, label, published_fit, literature_name)
         "the accuracy of the measurement chain and the fit (a few 1e-3 in eta here), far smaller than the "
         "differences the reference reports."
     )
+
+
+def plate_observations(ctx, theta_deg, d_over_r0, *, priors, iterations, size, reps=1, adaptive=False,
+                       plates=None):
+    """Simulated painted plates (Figs. 47-61) at one specular geometry, through turbulence, corrected by the
+    EM with ``priors`` and registered: {plate name: [observation per repetition]} (see
+    ``scatterlab.characterization.pipeline.observe``); the D/r0 list may give one value per plate."""
+    from scatterlab.characterization import SceneConfig
+    from scatterlab.characterization.pipeline import observe
+    from scatterlab.characterization.scene_config import Plate
+    from scatterlab.imaging import painted_plate
+
+    plates = plates or [Plate(), Plate("steel", 3.60, 5.88)]
+    out = {}
+    for k, plate in enumerate(plates):
+        dr = d_over_r0[k] if isinstance(d_over_r0[0], (list, tuple)) else d_over_r0
+        cfg = SceneConfig(image_size=size, geometry_deg=[theta_deg], d_over_r0=list(dr), iterations=iterations,
+                          plates=[plate])
+        labels = painted_plate(size, theta=np.radians(theta_deg), rng=ctx.rng).labels
+        out[plate.metal] = {"labels": labels, "obs": [
+            observe(plate, labels, [np.radians(theta_deg)], cfg, ctx.rng, priors=priors, executor=ctx.executor,
+                    adaptive=adaptive)[0] for _ in range(reps)]}
+    return out

@@ -84,12 +84,15 @@ class _Ops:
     periodic. The spectrum of the window indicator is cached: the share of an object pixel's light that reaches
     the window costs one inverse transform per PSF change."""
 
-    def __init__(self, data_shape, pad, boundary):
+    def __init__(self, data_shape, pad, boundary, valid=None):
         self.H, self.W = data_shape
         self.pad = pad if boundary == "reeves" else 0
         self.shape = (self.H + 2 * self.pad, self.W + 2 * self.pad)
         self.win = (slice(self.pad, self.pad + self.H), slice(self.pad, self.pad + self.W))
-        self._win_spec = self.rfft(self.extend(np.ones((self.H, self.W)))) if self.pad else None
+        # measured pixels: the data window (Reeves) less the masked ones (saturated, bad)
+        self.masked = valid is not None and not np.all(valid)
+        ind = np.ones((self.H, self.W)) if valid is None else np.asarray(valid, float)
+        self._win_spec = self.rfft(self.extend(ind)) if (self.pad or self.masked) else None
 
     def rfft(self, a):
         return sfft.rfft2(a)
@@ -102,7 +105,7 @@ class _Ops:
 
     def window_share(self, Hf):
         """h^T * 1_window on the object grid (1 for periodic boundaries)."""
-        if not self.pad:
+        if self._win_spec is None:
             return 1.0
         return np.clip(self.irfft(self._win_spec * np.conj(Hf)), 1e-6, None)
 
@@ -123,7 +126,8 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
                      priors: tuple | None = None, prior_weight: float = 1.0, aop=0.0, estimate_aop: bool = False,
                      iterations: int = 50, tol: float | None = None, psf_radius: float | None = None,
                      boundary: str = "reeves", pad: int | None = None, gs_steps: int = 5,
-                     update_object: bool = True, s0_start=None, dolp_start=None) -> DeconvolutionResult:
+                     update_object: bool = True, s0_start=None, dolp_start=None, mask=None,
+                     saturation: float | None = None) -> DeconvolutionResult:
     """Blind deconvolution of polarimetric channel images.
 
     Parameters
@@ -142,6 +146,9 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
     boundary : "reeves" or "periodic"; pad : Reeves padding (default psf_radius).
     s0_start, dolp_start : float or (H, W), optional -- initial S0 [counts] and DOLP instead of the Stokes
         estimates of the data (a DOLP of 0 stays 0: the unpolarized EM is Richardson-Lucy).
+    mask : bool array (H, W), optional -- pixels to use (False: saturated, dead, ...); they leave the
+        likelihood as the Reeves border does, and the object there is estimated from its neighbours' light.
+    saturation : float, optional [photo-electrons] -- pixels where any channel reaches it are masked too.
 
     Returns
     -------
@@ -170,12 +177,27 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
         notes.append("polarizer angles are not evenly spaced: the S0/DOLP updates are generalised-EM steps "
                      "(coupled updates of Sec. 3.3.2)")
     d = np.clip(d, 0.0, None)
+    valid = np.ones(d.shape[1:], bool)
+    if mask is not None:
+        m = np.asarray(mask)
+        if m.shape != d.shape[1:] or m.dtype != bool:
+            raise ValueError(f"mask must be a boolean array of shape {d.shape[1:]}, got {m.dtype} {m.shape}")
+        valid &= m
+    if saturation is not None:
+        if not saturation > 0:
+            raise ValueError(f"saturation must be > 0 photo-electrons, got {saturation}")
+        valid &= np.all(d < saturation, axis=0)
+    if not valid.any():
+        raise ValueError("mask and saturation leave no pixel to use")
+    if not valid.all():
+        notes.append(f"{int((~valid).sum())} masked pixels (saturated or excluded) left out of the likelihood")
+        d = d * valid
     H, W = d.shape[1:]
     if psf_radius is None:
         psf_radius = min(H, W) / 4
     if pad is None:
         pad = int(np.ceil(psf_radius)) if boundary == "reeves" else 0
-    ops = _Ops((H, W), pad, boundary)
+    ops = _Ops((H, W), pad, boundary, valid)
     Hp, Wp = ops.shape
     yy, xx = np.mgrid[0:Hp, 0:Wp]
     support = np.hypot(yy - Hp // 2, xx - Wp // 2) <= psf_radius
@@ -202,8 +224,10 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
     from scatterlab.imaging import stokes_from_channels
 
     S = stokes_from_channels(d, th)
-    s0 = np.clip(S[0], 1e-3 * max(S[0].mean(), 1e-12), None)
+    s0 = np.clip(S[0], 1e-3 * max(S[0][valid].mean(), 1e-12), None)
     P0 = np.clip(np.hypot(S[1], S[2]) / np.maximum(S[0], 1e-12), 0.02, 0.98)
+    s0 = np.where(valid, s0, S[0][valid].mean())  # masked pixels start from the mean level
+    P0 = np.where(valid, P0, 0.5)
     if s0_start is not None:
         s0 = np.broadcast_to(np.asarray(s0_start, float), (H, W)).copy()
     if dolp_start is not None:
@@ -226,7 +250,8 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
 
     def likelihood(i):
         # d ln i - i; where d = 0 the clipped log is finite, so the product is exactly 0
-        return float(np.vdot(d, np.log(np.maximum(i, 1e-300))) - i.sum())
+        predicted = float(np.sum(i * valid)) if ops.masked else float(i.sum())
+        return float(np.vdot(d, np.log(np.maximum(i, 1e-300)))) - predicted
 
     state = model.forward(h, s0, P)
     loglik.append(likelihood(state.i))
@@ -234,7 +259,7 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
     w = ops.window_share(state.Hf)
     it = 0
     for it in range(1, iterations + 1):
-        r = np.divide(d, state.i, out=np.zeros_like(d), where=state.i > 0)
+        r = np.divide(d, state.i, out=np.zeros_like(d), where=(state.i > 0) & valid)
         T, Qp, Pp, R = model.estep(state, r, s0, P)
         if update_object:
             # S0 = T / sum_n w_n [(1 - P)/2 + P cos^2(alpha - theta_n)], w_n = h_n^T * 1_window the share of an

@@ -196,3 +196,37 @@ def test_prior_thresholds_and_initial_psf():
     assert spread(h0) > 2 * spread(_resample_psf(psf(pupil, pad=2), shape))
     with pytest.raises(ValueError, match="d_over_r0"):
         initial_psf(pupil, shape, d_over_r0=0)
+
+
+def test_saturated_pixels_are_masked_out_of_the_likelihood():
+    """A glint clipped at the full well: trusting the clipped counts loses its flux; masked (saturation=...)
+    the clipped pixels leave the likelihood like the Reeves border and the glint's flux is inferred from the
+    light it spills into unsaturated pixels. (The price, measured: the unconstrained core adds variance, about
+    1.5x the unsaturated-pixel S0 error here.) The log-likelihood stays monotone; bad masks are named."""
+    S, lab, P = scene()
+    S = S.copy()
+    S[:, 20:26, 20:26] *= 8.0
+    rng = np.random.default_rng(4)
+    h = gaussian_psf(S.shape[1:], 1.5)
+    clean = detect(channel_images(S, ANGLES_0_45_90_135, h), rng, photons=4e3)
+    full_well = 0.4 * clean.max()
+    counts = np.minimum(clean, full_well)
+    sat = np.any(counts >= full_well, axis=0)
+    kw = dict(psf0=_grid_psf(h, 6), psf_mode="fixed", iterations=40, psf_radius=6)
+    naive = blind_deconvolve(counts, ANGLES_0_45_90_135, **kw)
+    masked = blind_deconvolve(counts, ANGLES_0_45_90_135, saturation=full_well, **kw)
+    assert any("masked" in n for n in masked.notes)
+    assert np.all(np.diff(masked.loglik) >= -1e-10 * np.abs(masked.loglik[1:]))
+    truth = S[0] * clean.sum() / channel_images(S, ANGLES_0_45_90_135, h).sum()
+    flux = [r.s0[sat].sum() / truth[sat].sum() for r in (naive, masked)]  # measured 0.72 and 0.85
+    assert abs(flux[1] - 1) < abs(flux[0] - 1), flux
+    assert np.all(np.isfinite(masked.s0)) and np.all(np.isfinite(masked.dolp))
+    with pytest.raises(ValueError, match="mask"):
+        blind_deconvolve(counts, ANGLES_0_45_90_135, mask=np.ones((3, 3), bool))
+    with pytest.raises(ValueError, match="saturation"):
+        blind_deconvolve(counts, ANGLES_0_45_90_135, saturation=-1.0)
+
+
+def _grid_psf(h, pad):
+    """The centred PSF h (H, W) placed on the Reeves object grid (H + 2 pad, W + 2 pad)."""
+    return np.pad(h, pad)
