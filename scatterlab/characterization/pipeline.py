@@ -54,8 +54,46 @@ def _stokes_dolp(counts, angles):
     return S[0], np.clip(np.hypot(S[1], S[2]) / np.maximum(S[0], 1e-9), 0, 1)
 
 
+def _task_key(task) -> str:
+    """Digest of everything a deconvolution depends on (data, settings, priors, seed): its checkpoint name."""
+    import hashlib
+
+    h = hashlib.sha1(np.ascontiguousarray(task["counts"]).tobytes())
+    h.update(np.ascontiguousarray(task["angles"]).tobytes())
+    h.update(repr((task["iterations"], task["priors"], task.get("adaptive"), task.get("psf_model"),
+                   task["seed"])).encode())
+    return h.hexdigest()[:20]
+
+
 def _correct_task(task):
-    """One blind deconvolution (module-level so that process executors can run it)."""
+    """One blind deconvolution (module-level so that process executors can run it). With ``checkpoint`` (a
+    folder) the result is read from there when an earlier, interrupted run computed it, and written there
+    atomically otherwise."""
+    ckpt = Path(task["checkpoint"]) / f"{_task_key(task)}.npz" if task.get("checkpoint") else None
+    if ckpt is not None and ckpt.exists():
+        from scatterlab.deconvolution import SuperGaussianPrior
+
+        with np.load(ckpt, allow_pickle=False) as z:
+            out = {k: z[k] for k in ("s0", "dolp", "psf", "loglik")}
+            out["classes"] = z["classes"] if "classes" in z else None
+            out["priors"] = tuple(SuperGaussianPrior(c2, c3, int(m), str(name))
+                                  for (c2, c3, m), name in zip(z["prior_params"], z["prior_names"])) or None
+        return out
+    out = _deconvolve(task)
+    if ckpt is not None:
+        from scatterlab.runtime.results import write_npz
+
+        arrays = {k: out[k] for k in ("s0", "dolp", "psf", "loglik")}
+        if out["classes"] is not None:
+            arrays["classes"] = out["classes"]
+        pri = out["priors"] or ()
+        arrays["prior_params"] = np.array([[p.c2, p.c3, p.m] for p in pri], float).reshape(-1, 3)
+        arrays["prior_names"] = np.array([p.name for p in pri], dtype="U32")
+        write_npz(ckpt, overwrite=True, **arrays)
+    return out
+
+
+def _deconvolve(task):
     from scatterlab.deconvolution import adaptive_priors, blind_deconvolve, initial_psf, object_grid
 
     counts, angles, pupil = task["counts"], task["angles"], task["pupil"]
@@ -72,7 +110,7 @@ def _correct_task(task):
 
 
 def observe(plate, labels, thetas, cfg: SceneConfig, rng, *, priors=None, executor=None, adaptive=False,
-            cases=None) -> list:
+            cases=None, checkpoint=None) -> list:
     """Simulate, correct and register one plate at each specular geometry.
 
     Parameters
@@ -80,7 +118,8 @@ def observe(plate, labels, thetas, cfg: SceneConfig, rng, *, priors=None, execut
     plate : Plate -- materials and roughness; labels : int array (H, W) in object coordinates (0 paint, 1 metal,
         2 scratch); thetas : iterable of theta_i = theta_r [rad]; priors : DOLP priors for the classification
         (None: no classes); adaptive : re-centre the priors on each acquisition's DOLP histogram (Sec. 8.1.1);
-        cases : [(name, D/r0 or None)], default no turbulence + ``cfg.d_over_r0``.
+        cases : [(name, D/r0 or None)], default no turbulence + ``cfg.d_over_r0``; checkpoint : folder where
+        each deconvolution is saved as it finishes, and read back by a rerun after an interruption.
 
     Returns
     -------
@@ -118,7 +157,7 @@ def observe(plate, labels, thetas, cfg: SceneConfig, rng, *, priors=None, execut
             if dr0 is not None:
                 tasks.append(((len(obs), name), {"counts": counts, "angles": angles, "pupil": pupil,
                                                  "iterations": cfg.iterations, "priors": priors, "adaptive": adaptive,
-                                                 "psf_model": cfg.psf_model,
+                                                 "psf_model": cfg.psf_model, "checkpoint": checkpoint,
                                                  "seed": int(rng.integers(2**63))}))
         obs.append(o)
     ex = executor if executor is not None else get_executor("serial")
@@ -195,6 +234,10 @@ def characterize(cfg: SceneConfig, out, *, overwrite: bool = False, executor=Non
     mid = int(np.argmin(np.abs(np.asarray(cfg.geometry_deg) - 50)))  # Table 4 / Figs. 49-50 geometry
     sel = interior((cfg.image_size, cfg.image_size), max(2, cfg.image_size // 16))
     summary: dict = {"title": cfg.title, "cases": [c for c, _ in cases], "plates": {}}
+    # deconvolutions are checkpointed as they finish: an interrupted run resumes where it stopped (same seed
+    # and scene give the same data, hence the same checkpoint names); removed once the results are written
+    checkpoints = out / "checkpoints"
+    checkpoints.mkdir(exist_ok=True)
     tmp = out / "results.h5.part"
     with h5py.File(tmp, "w") as f5:
         f5.attrs["config"] = json.dumps(cfg.__dict__, default=lambda o: o.__dict__)
@@ -202,7 +245,8 @@ def characterize(cfg: SceneConfig, out, *, overwrite: bool = False, executor=Non
             g_plate = f5.create_group(plate.metal)
             labels = painted_plate(cfg.image_size, theta=theta[0], rng=rng).labels
             g_plate["labels"] = labels
-            obs = observe(plate, labels, theta, cfg, rng, priors=priors, executor=executor, cases=cases)
+            obs = observe(plate, labels, theta, cfg, rng, priors=priors, executor=executor, cases=cases,
+                          checkpoint=checkpoints)
             metal_lab = labels > 0
             psum: dict = {}
             # the images compared: no turbulence; per D/r0 degraded and corrected
@@ -283,7 +327,11 @@ def characterize(cfg: SceneConfig, out, *, overwrite: bool = False, executor=Non
         raise FileExistsError(f"{final} exists; pass overwrite=True")
     tmp.replace(final)  # atomic: a run interrupted before here leaves no half-written results.h5
     write_json(out / "summary.json", summary, overwrite=overwrite)
-    return _write_report(out, cfg, summary, overwrite)
+    report = _write_report(out, cfg, summary, overwrite)
+    import shutil
+
+    shutil.rmtree(checkpoints, ignore_errors=True)
+    return report
 
 
 def _plate_figure(out, name, labels, obs, g_plate, kinds, cfg, mid, overwrite):

@@ -93,3 +93,36 @@ def test_keystone_registration_recovers_object_coordinates_and_shifts():
         keystone_correct(img, np.radians(89.5))
     with pytest.raises(ValueError, match="same shape"):
         estimate_shift(img, img[:10])
+
+
+def test_deconvolutions_are_checkpointed_and_resumed(tmp_path, monkeypatch):
+    """A run interrupted after some deconvolutions finished resumes from their checkpoints with identical
+    results; the checkpoints go once the results are written."""
+    import json
+
+    from scatterlab.characterization import pipeline
+
+    cfg = tiny(estimate=["classes"])
+    calls = []
+    real = pipeline._deconvolve
+
+    def counting(task):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt  # the second deconvolution is interrupted
+        return real(task)
+
+    monkeypatch.setattr(pipeline, "_deconvolve", counting)
+    with pytest.raises(KeyboardInterrupt):
+        characterize(cfg, tmp_path / "run")
+    assert len(list((tmp_path / "run" / "checkpoints").glob("*.npz"))) == 1
+    assert not (tmp_path / "run" / "results.h5").exists()
+    resumed = []
+    monkeypatch.setattr(pipeline, "_deconvolve", lambda task: resumed.append(1) or real(task))
+    characterize(cfg, tmp_path / "run", overwrite=True)
+    assert len(resumed) == 1  # two acquisitions, one read back from its checkpoint
+    assert not (tmp_path / "run" / "checkpoints").exists()
+    characterize(tiny(estimate=["classes"]), tmp_path / "fresh")
+    a = json.loads((tmp_path / "run" / "summary.json").read_text())["plates"]
+    b = json.loads((tmp_path / "fresh" / "summary.json").read_text())["plates"]
+    assert a == b
