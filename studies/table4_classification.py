@@ -55,9 +55,10 @@ def run(ctx):
         res["no_turbulence_vs_labels"] = float(np.mean([classification_errors(
             o["no_turbulence"]["degraded"]["classes"], metal, mask=sel)["total_error"] for o in d["obs"]]))
         ctx.metrics[plate] = res
-        for kind, mk in (("degraded", "o"), ("corrected", "s")):
-            ax.plot(d_r0, [res[f"D_r0_{x:g}_{kind}"]["total_error"] for x in d_r0], mk + "-", label=f"{kind} (ours)")
-            ax.plot(d_r0, [TABLE4[plate][f"D_r0_{x:g}_{kind}"][2] for x in d_r0], mk + "--", mfc="none",
+        for kind, mk, col in (("degraded", "o", "C0"), ("corrected", "s", "C1")):
+            ax.plot(d_r0, [res[f"D_r0_{x:g}_{kind}"]["total_error"] for x in d_r0], mk + "-", color=col,
+                    label=f"{kind} (ours, simulated)")
+            ax.plot(d_r0, [TABLE4[plate][f"D_r0_{x:g}_{kind}"][2] for x in d_r0], mk + "--", mfc="none", color=col,
                     label=f"{kind} (Table 4, measured)")
         ax.set(title=f"{plate} plate, 50 deg", xlabel="D/r0", ylabel="fraction misclassified vs no turbulence")
         ax.legend(fontsize=7)
