@@ -94,19 +94,29 @@ def _correct_task(task):
 
 
 def _deconvolve(task):
+    """Blind deconvolution of one acquisition. Adaptive priors (Sec. 8.1.1): the first half of the iterations
+    runs without priors (ML), the priors are re-centred on the histogram of that corrected DOLP, and the second
+    half continues from the ML estimates with them."""
     from scatterlab.deconvolution import adaptive_priors, blind_deconvolve, initial_psf, object_grid
 
     counts, angles, pupil = task["counts"], task["angles"], task["pupil"]
     H, W = counts.shape[1:]
     radius = H / 4
     priors = task["priors"]
-    if priors and task.get("adaptive"):
-        priors = adaptive_priors(_stokes_dolp(counts, angles)[1], base=priors)
+    kw = dict(psf_radius=radius, psf_mode=task.get("psf_model", "em"), pupil=pupil)
     psf0 = initial_psf(pupil, object_grid((H, W), radius), rng=task["seed"])
-    res = blind_deconvolve(counts, angles, psf0=psf0, iterations=task["iterations"], priors=priors,
-                           psf_radius=radius, psf_mode=task.get("psf_model", "em"), pupil=pupil)
-    return {"s0": res.s0, "dolp": res.dolp, "classes": res.classes, "psf": res.psfs[0], "loglik": res.loglik,
-            "priors": priors}
+    iterations = task["iterations"]
+    loglik = []
+    starts = {}
+    if priors and task.get("adaptive"):
+        first = blind_deconvolve(counts, angles, psf0=psf0, iterations=iterations // 2, **kw)
+        priors = adaptive_priors(first.dolp, base=priors)
+        psf0, loglik = first.psfs[0], list(first.loglik[:-1])
+        starts = dict(s0_start=first.s0, dolp_start=first.dolp)
+        iterations -= iterations // 2
+    res = blind_deconvolve(counts, angles, psf0=psf0, iterations=iterations, priors=priors, **starts, **kw)
+    return {"s0": res.s0, "dolp": res.dolp, "classes": res.classes, "psf": res.psfs[0],
+            "loglik": np.r_[loglik, res.loglik], "priors": priors}
 
 
 def observe(plate, labels, thetas, cfg: SceneConfig, rng, *, priors=None, executor=None, adaptive=False,
