@@ -35,8 +35,8 @@ def run(ctx):
     keys = ["no_turbulence"] + [f"D_r0_{x:g}_{k}" for k in ("degraded", "corrected") for x in cfg.d_over_r0]
     pyplot = plt()
     fig, axes = pyplot.subplots(2, 2, figsize=(11, 7))
-    lines = ["| plate | region | image | E[n] (sd) [published] | E[kappa] (sd) [published] | |n - truth| | "
-             "|kappa - truth| |", "|---|---|---|---|---|---|---|"]
+    lines = ["| plate | region | image | E[n] (sd) [published] | E[kappa] (sd) [published] | |E[n] - n| | "
+             "|E[kappa] - kappa| | median per-pixel abs(eta - eta_true) |", "|---|---|---|---|---|---|---|---|"]
     truths = {"paint": (cfg.plates[0].paint_n, cfg.plates[0].paint_kappa)}
     for i, plate in enumerate(summary["plates"]):
         p = next(pl for pl in cfg.plates if pl.metal == plate)
@@ -54,7 +54,8 @@ def run(ctx):
                              + (f" [{pub[0]:.3f} ({pub[1]:.3f})]" if pub else "")
                              + f" | {d['kappa_mean']:.3f} ({d['kappa_std']:.3f})"
                              + (f" [{pub[2]:.3f} ({pub[3]:.3f})]" if pub else "")
-                             + f" | {err[key]['n_error']:.3f} | {err[key]['kappa_error']:.3f} |")
+                             + f" | {err[key]['n_error']:.3f} | {err[key]['kappa_error']:.3f} | "
+                             f"{d['index_median_abs_error']:.3f} |")
                 ax.errorbar(x - 0.1, d["n_mean"], d["n_std"], fmt="o", color="C0", label="n (ours)" if x == 0 else None)
                 ax.errorbar(x + 0.1, d["kappa_mean"], d["kappa_std"], fmt="s", color="C1",
                             label="kappa (ours)" if x == 0 else None)
@@ -73,9 +74,16 @@ def run(ctx):
     ctx.add_image("characterization/aluminium")
     ctx.add_image("characterization/steel")
     ctx.say("\n".join(lines))
-    paint = {k: np.mean([ctx.metrics[pl]["paint"][k]["n_error"] for pl in summary["plates"]]) for k in keys}
-    ctx.metrics["paint_n_error_mean"] = paint
-    ctx.say("Mean |E[n] - 1.39| of the paint over both plates: " + ", ".join(f"{k} {v:.2f}" for k, v in paint.items())
-            + ". The text's corrected paint values (1.28-1.39) are far closer to the truth than its degraded ones "
-            "(2.24-2.38); the report of the pipeline run (characterization/report.md) gives the DOLP errors and "
-            "the classification behind these numbers.")
+    paint = {k: float(np.mean([ctx.metrics[pl]["paint"][k]["index_median_abs_error"] for pl in summary["plates"]]))
+             for k in keys}
+    kappa = {k: float(np.mean([ctx.metrics[pl]["paint"][k]["kappa_error"] for pl in summary["plates"]])) for k in keys}
+    ctx.metrics["paint_index_median_abs_error"] = paint
+    ctx.metrics["paint_kappa_mean_error"] = kappa
+    ctx.say("Paint, averaged over both plates -- median per-pixel |eta - eta_true|: "
+            + ", ".join(f"{k} {v:.2f}" for k, v in paint.items()) + "; |E[kappa] - 0.34|: "
+            + ", ".join(f"{k} {v:.2f}" for k, v in kappa.items()) + ". Correction brings the paint's kappa and "
+            "complex index back toward the no-turbulence values at both D/r0, as the text's corrected rows do "
+            "(its degraded paint n 2.24-2.38, corrected 1.28-1.39). The bare metals stay poorly determined "
+            "(n pinned at the bounds in many pixels): Rs ~ Rp at 30-60 deg leaves their DOLP small, the reason the "
+            "text gives for its metal errors. The pipeline's own report (characterization/report.md) gives the "
+            "DOLP, S0 and classification errors behind these numbers.")
