@@ -1,17 +1,18 @@
 """Polarimetric blind deconvolution, DOLP priors and material classification (Ch. V-VII, Eqs. 185-198).
 
 * :func:`blind_deconvolve` -- EM (LeMaster-Cain / Schulz) for S0, DOLP, AOP and the PSFs;
+* :mod:`psf_update` -- the Sec. 5.3.2 start PSF and the Gerchberg-Saxton pupil projection (Eqs. 146-150);
 * :mod:`priors` -- super-Gaussian DOLP priors (Eq. 195), the MAP DOLP update (Eq. 196), adaptive priors;
 * classification: several priors given to :func:`blind_deconvolve` label each pixel by the prior whose
   update maximizes the objective; :func:`classification_errors` scores a label map like Table 4.
 """
 
 from scatterlab.deconvolution.classify import classification_errors, classify_dolp
-from scatterlab.deconvolution.em import (DeconvolutionResult, blind_deconvolve, evenly_spaced, initial_psf,
-                                         object_grid)
+from scatterlab.deconvolution.em import DeconvolutionResult, blind_deconvolve, evenly_spaced, object_grid
+from scatterlab.deconvolution.psf_update import gerchberg_saxton, initial_psf, resample_psf
 from scatterlab.deconvolution.priors import (PRIOR_SETS, SuperGaussianPrior, adaptive_priors, dolp_update,
                                              dolp_update_companion, map_objective)
 
 __all__ = ["blind_deconvolve", "DeconvolutionResult", "evenly_spaced", "SuperGaussianPrior", "PRIOR_SETS",
            "dolp_update", "dolp_update_companion", "adaptive_priors", "map_objective", "classification_errors",
-           "classify_dolp", "initial_psf", "object_grid"]
+           "classify_dolp", "initial_psf", "object_grid", "gerchberg_saxton", "resample_psf"]

@@ -1,0 +1,77 @@
+r"""PSF models and updates for the blind deconvolution (Schulz; Eqs. 146-150; Sec. 5.3.2).
+
+* :func:`initial_psf` -- the text's start: the PSF of one random Kolmogorov phase screen, piston and tilt removed;
+* :func:`gerchberg_saxton` -- projection of a (non-parametric) PSF estimate onto the PSFs an aperture can form,
+  :math:`|\mathcal F\{A e^{j\phi}\}|^2`, by alternating the image-plane modulus and the pupil amplitude;
+* :func:`resample_psf` -- a centred PSF cropped or zero-padded onto another grid, unit sum.
+
+PSFs are ``(H, W)`` arrays, centred at ``(H // 2, W // 2)``, non-negative with unit sum.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["initial_psf", "gerchberg_saxton", "resample_psf"]
+
+
+def initial_psf(pupil, shape, d_over_r0: float = 10.0, rng=None) -> np.ndarray:
+    """The initial PSF of Sec. 5.3.2: the PSF of one random Kolmogorov phase screen (D/r0 = 10 by default)
+    over ``pupil`` (n, n), piston and tilt removed, centred on the object grid ``shape`` (Hp, Wp), unit sum.
+    A start as wide as the turbulence lets the multiplicative EM PSF update grow where the diffraction-limited
+    PSF is nearly zero."""
+    from scatterlab.imaging import phase_screen, psf, remove_piston_tilt
+
+    A = np.asarray(pupil, float)
+    if A.ndim != 2 or A.shape[0] != A.shape[1]:
+        raise ValueError(f"pupil must be a square 2-D array, got shape {A.shape}")
+    if not d_over_r0 > 0:
+        raise ValueError(f"d_over_r0 must be > 0, got {d_over_r0}")
+    n = A.shape[0]
+    diameter = 2 * np.sqrt((A > 0).sum() / np.pi)  # pupil diameter [grid samples]
+    phase = remove_piston_tilt(phase_screen(n, 1.0, diameter / d_over_r0, np.random.default_rng(rng)), A > 0)
+    return resample_psf(psf(A, phase, pad=2), shape)
+
+
+def resample_psf(h, shape) -> np.ndarray:
+    """Centre-crop or zero-pad a centred PSF to ``shape``; unit sum."""
+    out = np.zeros(shape)
+    Hs, Ws = h.shape
+    H, W = shape
+    ch, cw = min(H, Hs), min(W, Ws)
+    out[(H - ch) // 2:(H - ch) // 2 + ch, (W - cw) // 2:(W - cw) // 2 + cw] = \
+        h[(Hs - ch) // 2:(Hs - ch) // 2 + ch, (Ws - cw) // 2:(Ws - cw) // 2 + cw]
+    return out / out.sum()
+
+
+def gerchberg_saxton(h_target, pupil, phase, shape, steps):
+    """Project PSFs onto |F{A exp(j phi)}|^2 (Eqs. 146-150): impose sqrt(h_target) in the image plane and the
+    aperture amplitude in the pupil, ``steps`` times.
+
+    Parameters
+    ----------
+    h_target : array (K, Hp, Wp) -- PSF estimates (centred); pupil : array (n, n) -- aperture amplitude A;
+    phase : array (K, n, n) [rad] -- starting pupil phases; shape : (Hp, Wp) of the returned PSFs;
+    steps : int -- Gerchberg-Saxton iterations (the image plane is the 2n x 2n Nyquist grid of the pupil).
+
+    Returns
+    -------
+    psfs (K, Hp, Wp) unit sum, phases (K, n, n) [rad]
+    """
+    A = np.asarray(pupil, float)
+    n = A.shape[-1]
+    m = 2 * n
+    out_h, out_phase = [], []
+    for k in range(h_target.shape[0]):
+        target = np.sqrt(resample_psf(h_target[k], (m, m)))
+        ph = phase[k]
+        for _ in range(steps):
+            F = np.fft.fftshift(np.fft.fft2(A * np.exp(1j * ph), s=(m, m)))
+            F = target * np.exp(1j * np.angle(F)) * np.sqrt(np.sum(np.abs(F) ** 2))
+            field = np.fft.ifft2(np.fft.ifftshift(F))[:n, :n]
+            ph = np.where(A > 0, np.angle(field), 0.0)
+        F = np.fft.fftshift(np.fft.fft2(A * np.exp(1j * ph), s=(m, m)))
+        out_h.append(resample_psf(np.abs(F) ** 2, shape))
+        out_phase.append(ph)
+    return np.stack(out_h), np.stack(out_phase)
+
