@@ -51,7 +51,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from scatterlab.deconvolution.priors import dolp_update, map_objective
-from scatterlab.deconvolution.psf_update import gerchberg_saxton, initial_psf, resample_psf
+from scatterlab.deconvolution.psf_update import gerchberg_saxton, resample_psf
 
 __all__ = ["blind_deconvolve", "DeconvolutionResult", "evenly_spaced", "object_grid"]
 
