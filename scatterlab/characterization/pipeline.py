@@ -11,7 +11,8 @@ priors classifying each pixel). The AOP is not estimated: observation is specula
 Every image is keystone-corrected to object coordinates and aligned with the no-turbulence image
 (:mod:`scatterlab.characterization.registration`). Per pixel, the DOLP over the geometries is inverted for n and
 kappa by :func:`scatterlab.inversion.fit_dolp` (sigma known, as in the reference); per region (paint, bare
-metal) the posterior of the region-mean DOLP is sampled. Errors are computed against the object and against
+metal) the posterior of the region-mean DOLP is sampled, its noise a parameter (floor: the pixel scatter over
+sqrt(pixels)). Errors are computed against the object and against
 the no-turbulence image, the corrected estimate first re-imaged through the diffraction-limited PSF. Results go
 into one HDF5 file (images, maps, PSFs, chains) and a Markdown report with the tables and maps of the
 reference's Tables 4-5 and Figs. 49-61. Only what ``estimate`` asks for is computed.
@@ -300,19 +301,24 @@ def characterize(cfg: SceneConfig, out, *, overwrite: bool = False, executor=Non
                 if "posterior" in cfg.estimate and (kind == "corrected" or case == "no_turbulence"):
                     y = np.moveaxis(stack, 0, -1)
                     regions = [("paint", ~metal_lab & sel), (plate.metal, (labels == 1) & sel)]
-                    means = np.stack([y[r].mean(0) for _, r in regions])
-                    noise = [max(float(y[r].std(0).mean()) / np.sqrt(r.sum()), 1e-4) for _, r in regions]
+                    means = np.stack([y[r].mean(0) for _, r in regions])  # (regions, geometries)
+                    # the noise of a region-mean DOLP is a parameter: pixels are correlated by the PSF and the
+                    # halo biases them alike, so the pixel scatter / sqrt(pixels) is only its floor (with fewer
+                    # than three geometries the data cannot carry a noise parameter, and the floor is used)
+                    floor = min(max(float(y[r].std(0).mean()) / np.sqrt(r.sum()), 1e-4) for _, r in regions)
+                    noise = None if theta.size >= 3 else floor
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore", ConvergenceWarning)
-                        posts = [sample_posteriors(means[i:i + 1], theta, theta, noise[i], rng, sigma=cfg.sigma_known,
-                                                   n_steps=cfg.posterior_steps, executor=executor)[0]
-                                 for i in range(len(regions))]
+                        posts = sample_posteriors(means, theta, theta, noise, rng, sigma=cfg.sigma_known,
+                                                  noise_bounds=(floor, 0.5), n_steps=cfg.posterior_steps,
+                                                  executor=executor)
                     for (region, _), post in zip(regions, posts):
                         gg = g_plate.require_group(key).create_group(f"posterior_{region}")
                         gg["chain"] = post.chain
                         gg.attrs["summary"] = json.dumps(post.summary(), default=float)
                         s = post.summary()["parameters"]
-                        cs[f"posterior_{region}"] = {p: [s[p]["median"], *s[p]["ci68"]] for p in ("n", "kappa")}
+                        cs[f"posterior_{region}"] = {p: [s[p]["median"], *s[p]["ci68"]] for p in ("n", "kappa", "noise")
+                                                     if p in s}
                 psum[key] = cs
             for o, deg in zip(obs, cfg.geometry_deg):
                 gt = g_plate.create_group(f"theta_{deg:g}")
@@ -442,11 +448,13 @@ def _write_report(out, cfg, summary, overwrite):
         lines += ["", f"![{plate}]({plate}.png)", ""]
         post = {c: cs for c, cs in psum.items() if "posterior_paint" in cs}
         if post:
-            lines += ["Posterior (region-mean DOLP over the geometries), median and 68 % interval:", ""]
+            lines += ["Posterior of the region-mean DOLP over the geometries (its noise inferred too), median and 68 % "
+                      "interval:", ""]
             for key, cs in post.items():
                 for region in ("paint", plate):
                     p = cs[f"posterior_{region}"]
                     lines.append(f"- {key}, {region}: n {p['n'][0]:.3f} [{p['n'][1]:.3f}, {p['n'][2]:.3f}], "
-                                 f"kappa {p['kappa'][0]:.3f} [{p['kappa'][1]:.3f}, {p['kappa'][2]:.3f}]")
+                                 f"kappa {p['kappa'][0]:.3f} [{p['kappa'][1]:.3f}, {p['kappa'][2]:.3f}]"
+                                 + (f", DOLP noise {p['noise'][0]:.4f}" if "noise" in p else ""))
             lines.append("")
     return write_text(Path(out) / "report.md", "\n".join(lines), overwrite=overwrite)

@@ -126,3 +126,18 @@ def test_deconvolutions_are_checkpointed_and_resumed(tmp_path, monkeypatch):
     a = json.loads((tmp_path / "run" / "summary.json").read_text())["plates"]
     b = json.loads((tmp_path / "fresh" / "summary.json").read_text())["plates"]
     assert a == b
+
+
+def test_cli_quick_run_infers_the_region_noise(tmp_path):
+    """`scatterlab characterize --quick` runs the bundled scene end to end (three geometries: the region
+    posteriors carry a DOLP-noise parameter, bounded below by the pixel scatter); a bad scene file exits with 2."""
+    from scatterlab.cli import main
+
+    assert main(["characterize", "--quick", "--out", str(tmp_path / "q")]) == 0
+    s = json.loads((tmp_path / "q" / "summary.json").read_text())["plates"]
+    post = s["aluminium"]["D_r0_7.9_corrected"]["posterior_paint"]
+    assert set(post) == {"n", "kappa", "noise"} and post["noise"][0] > 0
+    assert "DOLP noise" in (tmp_path / "q" / "report.md").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text("image_size = 7\n")
+    assert main(["characterize", str(bad), "--out", str(tmp_path / "b")]) == 2
