@@ -139,7 +139,7 @@ def observe(plate, labels, thetas, cfg: SceneConfig, rng, *, priors=None, execut
     estimated PSFs, the log-likelihood history and the registration shifts [pixels]. The no-turbulence images
     are not deconvolved (they are the reference the others are compared with, as in the text).
     """
-    from scatterlab.characterization.registration import apply_shift, estimate_shift, foreshorten, keystone_correct
+    from scatterlab.characterization.registration import apply_shift, foreshorten, keystone_correct, register
     from scatterlab.deconvolution import classify_dolp
     from scatterlab.imaging import Scene, convolve, render_stokes
     from scatterlab.runtime import get_executor
@@ -175,35 +175,32 @@ def observe(plate, labels, thetas, cfg: SceneConfig, rng, *, priors=None, execut
     results = ex.map(_correct_task, [t for _, t in tasks], desc=f"{plate.metal}: deconvolution")
     done = {key: r for (key, _), r in zip(tasks, results)}
 
-    def reg(img, th, shift, order=1):
-        out = keystone_correct(img, th, order=order)
-        return out if shift is None else apply_shift(out, shift, order=order)
+    def classes_to_object(cls, th, shift):
+        return apply_shift(keystone_correct(cls.astype(float), th, order=0), shift, order=0).astype(int)
 
     for k, o in enumerate(obs):
         th = o["theta"]
-        ref = None
+        ref = None  # the no-turbulence S0 in object coordinates: every other image is aligned with it
         for name, dr0 in cases:
             c = o[name]
             s0, dolp = _stokes_dolp(c["counts"], angles)
-            s0k = keystone_correct(s0, th)
-            shift = None if ref is None else estimate_shift(ref, s0k)
-            ref = s0k if ref is None else ref
-            c["degraded"] = {"s0": reg(s0, th, shift), "dolp": reg(dolp, th, shift), "shift": shift}
+            s0_reg, (dolp_reg,), shift = register(s0, dolp[None], th, reference=ref)
+            ref = s0_reg if ref is None else ref
+            c["degraded"] = {"s0": s0_reg, "dolp": dolp_reg, "shift": shift}
             if priors:
-                c["degraded"]["classes"] = reg(classify_dolp(dolp, priors).astype(float), th, shift, 0).astype(int)
+                c["degraded"]["classes"] = classes_to_object(classify_dolp(dolp, priors), th, shift)
             if (k, name) in done:
                 r = done[(k, name)]
-                ck = keystone_correct(r["s0"], th)
-                sh = estimate_shift(ref, ck)
-                # the object estimate seen through the no-turbulence (diffraction-limited) system, to compare
-                # like with like against the no-turbulence image
+                # the object estimate also seen through the no-turbulence (diffraction-limited) system, to
+                # compare like with like against the no-turbulence image
                 b0, b1 = convolve(np.stack([r["s0"], r["dolp"] * r["s0"]]), o[cases[0][0]]["psf_true"])
-                c["corrected"] = {"s0": reg(r["s0"], th, sh), "dolp": reg(r["dolp"], th, sh), "shift": sh,
-                                  "psf": r["psf"], "loglik": r["loglik"], "priors": r["priors"],
-                                  "reimaged_s0": reg(b0, th, sh),
-                                  "reimaged_dolp": reg(np.clip(b1 / np.maximum(b0, 1e-9), 0, 1), th, sh)}
+                others = np.stack([r["dolp"], b0, np.clip(b1 / np.maximum(b0, 1e-9), 0, 1)])
+                s0_reg, (dolp_reg, b0_reg, bdolp_reg), sh = register(r["s0"], others, th, reference=ref)
+                c["corrected"] = {"s0": s0_reg, "dolp": dolp_reg, "shift": sh, "psf": r["psf"],
+                                  "loglik": r["loglik"], "priors": r["priors"], "reimaged_s0": b0_reg,
+                                  "reimaged_dolp": bdolp_reg}
                 if r["classes"] is not None:
-                    c["corrected"]["classes"] = reg(r["classes"].astype(float), th, sh, 0).astype(int)
+                    c["corrected"]["classes"] = classes_to_object(r["classes"], th, sh)
     return obs
 
 
@@ -401,8 +398,10 @@ def _write_report(out, cfg, summary, overwrite):
 
     mid = int(np.argmin(np.abs(np.asarray(cfg.geometry_deg) - 50)))
     lines = [f"# Characterization: {cfg.title}", "",
-             f"Geometries {cfg.geometry_deg} deg (specular), D/r0 {cfg.d_over_r0}, {cfg.photons:g} photo-electrons "
-             f"peak, {cfg.image_size}^2 pixels, polarizers {cfg.polarizer_deg} deg, {cfg.iterations} EM iterations, "
+             f"{cfg.wavelength_um:g} um, geometries {cfg.geometry_deg} deg (specular), D/r0 {cfg.d_over_r0}, "
+             f"{cfg.photons:g} photo-electrons "
+             f"peak, {cfg.image_size}^2 pixels, polarizers {cfg.polarizer_deg} deg, {cfg.iterations} EM iterations "
+             f"({cfg.psf_model} PSFs), "
              f"priors {cfg.priors}, sigma {cfg.sigma_known} (known). Run time {summary['seconds']:.0f} s. "
              "Data: `results.h5`; numbers: `summary.json`. Images are keystone-corrected to object coordinates and "
              "aligned with the no-turbulence image; statistics exclude a border of 1/16 of the image. "

@@ -94,7 +94,8 @@ def register(s0, others, theta_r, reference=None):
     Parameters
     ----------
     s0 : array (H, W) -- the irradiance image used to estimate the translation.
-    others : array (..., H, W) -- images carried along (DOLP, classes as floats, ...).
+    others : array (..., H, W) -- images carried along (DOLP, re-imaged S0, ...), interpolated linearly (class
+        maps need order 0: :func:`keystone_correct` and :func:`apply_shift` with ``order=0``).
     theta_r : float [rad] -- observation angle of the acquisition.
     reference : array (H, W), optional -- object-coordinate image to align with (none: no translation).
 

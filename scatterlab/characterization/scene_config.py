@@ -4,7 +4,8 @@ Keys (units in the names; all optional except where noted):
 
 ```toml
 title = "painted aluminium and steel, 1550 nm"
-wavelength_um = 1.55
+wavelength_um = 1.55                  # recorded with the results: the plates' indices below are the ones at
+                                      # this wavelength, and the optics are sampled in lambda/D (2 px per lambda/D)
 image_size = 128                      # pixels (square), the pupil grid is half of it
 geometry_deg = [30, 35, 40, 45, 50, 55, 60]   # specular theta_i = theta_r per acquisition (Ch. VII)
 d_over_r0 = [7.9, 12.9]               # turbulence strengths; a no-turbulence case is always included
@@ -78,6 +79,8 @@ class SceneConfig:
             raise ValueError("geometry_deg must list angles in (0, 90) deg")
         if any(x <= 0 for x in self.d_over_r0):
             raise ValueError("d_over_r0 entries must be > 0")
+        if not self.wavelength_um > 0:
+            raise ValueError(f"wavelength_um must be > 0, got {self.wavelength_um}")
         if self.photons <= 0 or self.read_noise < 0:
             raise ValueError("photons must be > 0 and read_noise >= 0")
         if len(self.polarizer_deg) < 3:

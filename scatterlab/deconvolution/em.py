@@ -226,7 +226,8 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
     h /= h.sum(axis=(-2, -1), keepdims=True)
     pupil_phase = np.zeros((nps,) + np.shape(pupil)) if psf_mode == "pupil" else None
 
-    # initial object: least-squares Stokes of the data (Sec. 5.3.2)
+    # initial object: least-squares Stokes images of the data (the text's start, S0 = 1 and P = 1/2, via
+    # s0_start / dolp_start)
     from scatterlab.imaging import stokes_from_channels
 
     S = stokes_from_channels(d, th)

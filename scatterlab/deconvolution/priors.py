@@ -12,8 +12,9 @@ at a pixel, the M-step solves
 
 an (m+1)-order polynomial with :math:`f(0) = Q \ge 0` and :math:`f(1) = Q - T \le 0`, so a root lies in
 [0, 1]. The coefficients reach :math:`c_2^m \approx 10^{15}` (aluminium group), so the polynomial is divided by
-``T`` and solved for every pixel at once by bisection on [0, 1] (60 halvings: 1e-18) followed by two Newton
-steps -- never the companion matrix per pixel (:func:`dolp_update_companion` does that for testing). Where
+``T`` and solved for every pixel at once: the roots lie between q = Q/T and c3 (see :func:`dolp_update`), each
+sign change on a grid over that interval is bracketed and refined by safeguarded Newton steps -- never the
+companion matrix per pixel (:func:`dolp_update_companion` does that for testing). Where
 several roots lie in [0, 1] the one with the largest complete-data objective
 :math:`Q\ln\mathcal P + (T - Q)\ln(1 - \mathcal P) + w\ln\Pi` is taken.
 """

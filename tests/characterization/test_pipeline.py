@@ -60,6 +60,11 @@ def test_scene_files_are_validated(tmp_path):
     p.write_text('priors = "ch9"\n')
     with pytest.raises(ValueError, match="priors"):
         load_scene(p)
+    for bad, name in (("wavelength_um = -1.55", "wavelength_um"), ('psf_model = "gauss"', "psf_model"),
+                      ("iterations = 0", "iterations")):
+        p.write_text(bad + "\n")
+        with pytest.raises(ValueError, match=name):
+            load_scene(p)
 
 
 def test_keystone_registration_recovers_object_coordinates_and_shifts():
