@@ -66,7 +66,7 @@ def _characterize(args) -> int:
     try:
         cfg = load_scene(args.scene) if args.scene else default_scene()
         if args.quick:  # a small, fast version of the same scene (tests, smoke runs)
-            cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = 48, cfg.geometry_deg[::3], cfg.d_over_r0[:1]
+            cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = 64, cfg.geometry_deg[::3], cfg.d_over_r0[:1]
             cfg.iterations, cfg.posterior_steps = 15, 400
         ex = _executor(args)
         try:

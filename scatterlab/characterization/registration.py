@@ -12,10 +12,13 @@ image centre.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["foreshorten", "keystone_correct", "estimate_shift", "apply_shift", "register"]
+__all__ = ["foreshorten", "keystone_correct", "estimate_shift", "apply_shift", "register", "Registered",
+           "register_restoration"]
 
 
 def _check_theta(theta_r):
@@ -109,3 +112,59 @@ def register(s0, others, theta_r, reference=None):
         return s0c, oc, np.zeros(2)
     shift = estimate_shift(reference, s0c)
     return apply_shift(s0c, shift), apply_shift(oc, shift), shift
+
+
+@dataclass
+class Registered:
+    """One restoration in object coordinates, aligned with the reference.
+
+    Attributes
+    ----------
+    kind : str
+        As the restoration (``"degraded"``, ``"restored"``, ``"corrected"``).
+    s0, dolp : ndarray, shape (H, W)
+        Irradiance [photo-electrons] and DOLP (NaN where there is no light).
+    classes : ndarray of int, shape (H, W), or None
+    shift : ndarray, shape (2,)
+        Translation applied after the keystone stretch [object pixels].
+    """
+
+    kind: str
+    s0: np.ndarray
+    dolp: np.ndarray
+    classes: np.ndarray | None
+    shift: np.ndarray
+
+
+def register_restoration(rest, theta_r, reference=None, *, foreshortened: bool = True) -> Registered:
+    """Keystone-correct a :class:`~scatterlab.characterization.restoration.Restoration` and align it with the
+    object-coordinate image ``reference`` (None: no translation).
+
+    Parameters
+    ----------
+    rest : Restoration
+        Camera-coordinate estimates.
+    theta_r : float
+        Observation angle [rad].
+    reference : ndarray, shape (H, W), optional
+        Object-coordinate S0 to align with (the no-turbulence image, or the true object for ideal
+        registration).
+    foreshortened : bool
+        False when the camera saw object coordinates (no keystone stretch).
+
+    Returns
+    -------
+    Registered
+    """
+    dolp = np.nan_to_num(rest.dolp, nan=0.0)
+    if foreshortened:
+        s0, dolp = keystone_correct(rest.s0, theta_r), keystone_correct(dolp, theta_r)
+        cls = None if rest.classes is None else keystone_correct(rest.classes.astype(float), theta_r, order=0)
+    else:
+        s0, cls = np.asarray(rest.s0, float), None if rest.classes is None else rest.classes.astype(float)
+    shift = np.zeros(2) if reference is None else estimate_shift(reference, s0)
+    if reference is not None:
+        s0, dolp = apply_shift(s0, shift), apply_shift(dolp, shift)
+        cls = None if cls is None else apply_shift(cls, shift, order=0)
+    dolp = np.where(s0 > 0, dolp, np.nan)
+    return Registered(rest.kind, s0, dolp, None if cls is None else np.rint(cls).astype(int), shift)

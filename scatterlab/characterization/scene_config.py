@@ -19,6 +19,9 @@ estimate = ["classes", "n_kappa", "posterior"]   # what to compute (leave out wh
 sigma_known = 0.3                     # roughness used by the n, kappa inversion (the reference measured it)
 posterior_steps = 1500
 seed = 20101210
+plate_zoom = 2.0                      # field of view: 1 = the whole "st" template; 2 = the right side of the
+plate_center = [7.2, 8.5]             # "s" and the left side of the "t", as in Figs. 49-52 (template units)
+region_margin_px = 4                  # erosion of the region masks (default: 2 px / cos of the largest angle)
 
 [[plates]]                            # one painted plate per entry (Figs. 49-61)
 metal = "aluminium"
@@ -33,17 +36,20 @@ paint_roughness = 0.3
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
-
-__all__ = ["SceneConfig", "default_scene", "load_scene"]
+__all__ = ["SceneConfig", "Plate", "default_scene", "load_scene", "plate_labels"]
 
 ESTIMATES = ("classes", "n_kappa", "posterior")
+MAX_IMAGE_SIZE = 2048  # pixels: the 2x-wide rendering field and the EM grids of one image fit in a few GiB
 
 
 @dataclass
 class Plate:
+    """One painted metal plate: indices ``n - j kappa`` at the scene's wavelength and per-axis rms slopes."""
+
     metal: str = "aluminium"
     metal_n: float = 1.44
     metal_kappa: float = 16.0
@@ -52,9 +58,28 @@ class Plate:
     metal_roughness: float = 0.3
     paint_roughness: float = 0.3
 
+    def validate(self, where: str = "plates") -> "Plate":
+        if not isinstance(self.metal, str) or not self.metal.isidentifier():
+            raise ValueError(f"{where}.metal must be a name (letters, digits, _), got {self.metal!r}")
+        for name in ("metal_n", "paint_n"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and 0 < v <= 100):
+                raise ValueError(f"{where}.{name} must be in (0, 100], got {v!r}")
+        for name in ("metal_kappa", "paint_kappa"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and 0 <= v <= 1000):
+                raise ValueError(f"{where}.{name} must be in [0, 1000], got {v!r}")
+        for name in ("metal_roughness", "paint_roughness"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and 1e-3 <= v <= 1.5):
+                raise ValueError(f"{where}.{name} (rms slope) must be in [0.001, 1.5], got {v!r}")
+        return self
+
 
 @dataclass
 class SceneConfig:
+    """A characterization scene (module docstring lists the keys with their units)."""
+
     title: str = "painted aluminium and steel plates, 1550 nm (Figs. 49-61)"
     wavelength_um: float = 1.55
     image_size: int = 128
@@ -70,35 +95,104 @@ class SceneConfig:
     sigma_known: float = 0.3
     posterior_steps: int = 1500
     seed: int = 20101210
+    plate_zoom: float = 2.0
+    plate_center: list = field(default_factory=lambda: [7.2, 8.5])
+    region_margin_px: int | None = None
     plates: list = field(default_factory=lambda: [Plate(), Plate("steel", 3.60, 5.88)])
 
     def validate(self) -> "SceneConfig":
-        if self.image_size < 16 or self.image_size % 2:
-            raise ValueError("image_size must be an even number of pixels >= 16")
-        if not self.geometry_deg or not all(0 < g < 90 for g in self.geometry_deg):
-            raise ValueError("geometry_deg must list angles in (0, 90) deg")
-        if any(x <= 0 for x in self.d_over_r0):
-            raise ValueError("d_over_r0 entries must be > 0")
-        if not self.wavelength_um > 0:
-            raise ValueError(f"wavelength_um must be > 0, got {self.wavelength_um}")
-        if self.photons <= 0 or self.read_noise < 0:
-            raise ValueError("photons must be > 0 and read_noise >= 0")
-        if len(self.polarizer_deg) < 3:
-            raise ValueError("polarizer_deg needs at least three angles")
-        if self.psf_model not in ("em", "pupil"):
-            raise ValueError(f"psf_model must be 'em' or 'pupil', got {self.psf_model!r}")
-        if self.iterations < 1:
-            raise ValueError(f"iterations must be >= 1, got {self.iterations}")
-        if self.priors not in ("ch5", "ch6", "ch7", "none"):
-            raise ValueError("priors must be one of ch5, ch6, ch7, none")
-        bad = set(self.estimate) - set(ESTIMATES)
-        if bad:
-            raise ValueError(f"estimate entries must be among {ESTIMATES}, got {sorted(bad)}")
-        if "n_kappa" in self.estimate and len(self.geometry_deg) < 2:
-            raise ValueError("estimating n and kappa needs at least two geometries")
+        """Check every key (type and range) before anything runs; ValueError names the key."""
+        _check_types(self)
+        _check_ranges(self)
         if not self.plates:
-            raise ValueError("at least one [[plates]] entry is needed")
+            raise ValueError("plates: at least one [[plates]] entry is needed (an empty list is not allowed)")
+        names = [p.metal for p in self.plates]
+        if len(set(names)) != len(names):
+            raise ValueError(f"plates: each plate needs its own metal name, got {names}")
+        for k, p in enumerate(self.plates):
+            if not isinstance(p, Plate):
+                raise ValueError(f"plates[{k}] must be a table of plate keys")
+            _check_types(p, f"plates[{k}]")
+            p.validate(f"plates[{k}]")
         return self
+
+
+_LISTS = {"geometry_deg": float, "d_over_r0": float, "polarizer_deg": float, "estimate": str,
+          "plate_center": float}
+
+
+def _check_types(obj, where: str = "") -> None:
+    """Type of every field of a dataclass against its default's type (ints accept ints only)."""
+    prefix = f"{where}." if where else ""
+    for f in fields(obj):
+        v = getattr(obj, f.name)
+        if f.name == "plates" or (f.name == "region_margin_px" and v is None):
+            continue
+        if f.name in _LISTS:
+            kind = _LISTS[f.name]
+            ok = isinstance(v, list) and all(_is(x, kind) for x in v)
+            if not ok:
+                raise ValueError(f"{prefix}{f.name} must be a list of {kind.__name__}s, got {v!r}")
+            continue
+        kind = {"int": int, "float": float, "str": str, "int | None": int}.get(str(f.type), type(f.default))
+        if not _is(v, kind):
+            raise ValueError(f"{prefix}{f.name} must be a {kind.__name__}, got {v!r}")
+
+
+def _is(v, kind) -> bool:
+    if kind is float:
+        return isinstance(v, (int, float)) and not isinstance(v, bool)
+    if kind is int:
+        return isinstance(v, int) and not isinstance(v, bool)
+    return isinstance(v, kind)
+
+
+def _finite(cfg, name, lo, hi, *, lo_open=False):
+    v = getattr(cfg, name)
+    ok = math.isfinite(v) and (v > lo if lo_open else v >= lo) and v <= hi
+    if not ok:
+        raise ValueError(f"{name} must be in {'(' if lo_open else '['}{lo:g}, {hi:g}], got {v!r}")
+
+
+def _check_ranges(cfg: SceneConfig) -> None:
+    if not (16 <= cfg.image_size <= MAX_IMAGE_SIZE and cfg.image_size % 2 == 0):
+        raise ValueError(f"image_size must be an even number of pixels in [16, {MAX_IMAGE_SIZE}] "
+                         f"(memory grows as its square), got {cfg.image_size}")
+    if not cfg.geometry_deg or not all(math.isfinite(g) and 0 < g < 89 for g in cfg.geometry_deg):
+        raise ValueError(f"geometry_deg must list angles in (0, 89) deg, got {cfg.geometry_deg}")
+    if not all(math.isfinite(x) and 0 < x <= 100 for x in cfg.d_over_r0):
+        raise ValueError(f"d_over_r0 entries must be in (0, 100], got {cfg.d_over_r0}")
+    _finite(cfg, "wavelength_um", 0, 1e4, lo_open=True)
+    _finite(cfg, "photons", 0, 1e12, lo_open=True)
+    _finite(cfg, "read_noise", 0, 1e6)
+    _finite(cfg, "sigma_known", 1e-3, 1.5)
+    _finite(cfg, "plate_zoom", 0.25, 16)
+    if len(cfg.plate_center) != 2 or not all(math.isfinite(c) and 0 <= c <= 16 for c in cfg.plate_center):
+        raise ValueError(f"plate_center must be [row, column] in template units within [0, 16], "
+                         f"got {cfg.plate_center}")
+    import numpy as np
+
+    a = np.mod(np.radians(cfg.polarizer_deg), np.pi)
+    if len(np.unique(np.round(a, 9))) < 3 or not all(math.isfinite(x) for x in cfg.polarizer_deg):
+        raise ValueError(f"polarizer_deg needs at least three distinct angles (mod 180 deg), "
+                         f"got {cfg.polarizer_deg}")
+    if cfg.psf_model not in ("em", "pupil"):
+        raise ValueError(f"psf_model must be 'em' or 'pupil', got {cfg.psf_model!r}")
+    if not 1 <= cfg.iterations <= 100000:
+        raise ValueError(f"iterations must be in [1, 100000], got {cfg.iterations}")
+    if not 100 <= cfg.posterior_steps <= 10**6:
+        raise ValueError(f"posterior_steps must be in [100, 1000000], got {cfg.posterior_steps}")
+    if not 0 <= cfg.seed < 2**63:
+        raise ValueError(f"seed must be in [0, 2^63), got {cfg.seed}")
+    if cfg.region_margin_px is not None and not 0 <= cfg.region_margin_px <= cfg.image_size // 8:
+        raise ValueError(f"region_margin_px must be in [0, image_size/8], got {cfg.region_margin_px}")
+    if cfg.priors not in ("ch5", "ch6", "ch7", "none"):
+        raise ValueError(f"priors must be one of ch5, ch6, ch7, none, got {cfg.priors!r}")
+    bad = set(cfg.estimate) - set(ESTIMATES)
+    if bad:
+        raise ValueError(f"estimate entries must be among {ESTIMATES}, got {sorted(bad)}")
+    if "n_kappa" in cfg.estimate and len(cfg.geometry_deg) < 2:
+        raise ValueError("geometry_deg: estimating n and kappa needs at least two geometries")
 
 
 def default_scene() -> SceneConfig:
@@ -106,17 +200,43 @@ def default_scene() -> SceneConfig:
     return SceneConfig().validate()
 
 
+def plate_labels(cfg: SceneConfig, rng):
+    """The plate's object-coordinate label map ``(image_size, image_size)`` (0 paint, 1 metal, 2 scratch)."""
+    from scatterlab.imaging import painted_plate
+
+    return painted_plate(cfg.image_size, zoom=cfg.plate_zoom, center=tuple(cfg.plate_center), rng=rng).labels
+
+
 def load_scene(path) -> SceneConfig:
-    """Read a TOML scene description (module docstring); unknown keys raise ValueError naming them."""
+    """Read a TOML scene description (module docstring).
+
+    Unknown keys (also inside ``[[plates]]``), wrong types and out-of-range values raise ValueError naming
+    the key; a file that is not TOML raises ValueError saying that a TOML scene was expected.
+    """
     import tomllib
 
-    data = tomllib.loads(Path(path).read_text())
-    plates = [Plate(**p) for p in data.pop("plates", [])] or None
-    known = set(SceneConfig.__dataclass_fields__)
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise ValueError(f"{path}: expected a TOML scene file ({exc})") from None
+    plates = data.pop("plates", None)
+    known = {f.name for f in fields(SceneConfig)} - {"plates"}
     unknown = set(data) - known
     if unknown:
-        raise ValueError(f"unknown scene keys {sorted(unknown)}; allowed: {sorted(known)}")
+        raise ValueError(f"{path}: unknown scene keys {sorted(unknown)}; allowed: {sorted(known)}")
     cfg = SceneConfig(**data)
     if plates is not None:
-        cfg.plates = plates
-    return cfg.validate()
+        if not isinstance(plates, list):
+            raise ValueError(f"{path}: plates must be [[plates]] tables")
+        pk = {f.name for f in fields(Plate)}
+        cfg.plates = []
+        for k, p in enumerate(plates):
+            bad = set(p) - pk
+            if bad:
+                raise ValueError(f"{path}: unknown key(s) {sorted(bad)} in plates[{k}]; allowed: {sorted(pk)}")
+            cfg.plates.append(Plate(**p))
+    try:
+        return cfg.validate()
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None

@@ -8,8 +8,24 @@ __all__ = ["classification_errors", "classify_dolp"]
 
 
 def classification_errors(estimate, truth, *, metal_classes=(1,), mask=None) -> dict:
-    """Fractions of pixels wrongly called metal / dielectric / either, the correlation coefficient and RMSE
-    between the two maps (Table 4), for integer label maps where ``metal_classes`` are the metal labels."""
+    """Classification errors of a label map against a reference map (Table 4).
+
+    Parameters
+    ----------
+    estimate, truth : array_like of int, shape (H, W)
+        Label maps; ``metal_classes`` are the metal labels, all others dielectric.
+    metal_classes : tuple of int
+    mask : bool array (H, W), optional
+        Pixels to score.
+
+    Returns
+    -------
+    dict
+        ``false_metal`` and ``false_dielectric`` (fractions of all pixels), ``false_metal_rate`` (per true
+        dielectric pixel) and ``false_dielectric_rate`` (per true metal pixel) -- Table 4's columns --,
+        ``metal_share``, ``total_error`` (fraction of all pixels), ``correlation`` and ``rmse`` of the binary
+        maps.
+    """
     e = np.isin(np.asarray(estimate), metal_classes)
     t = np.isin(np.asarray(truth), metal_classes)
     if e.shape != t.shape:
@@ -19,7 +35,13 @@ def classification_errors(estimate, truth, *, metal_classes=(1,), mask=None) -> 
     n = e.size
     ef, tf = e.astype(float), t.astype(float)
     corr = float(np.corrcoef(ef, tf)[0, 1]) if ef.std() > 0 and tf.std() > 0 else float("nan")
+    n_metal, n_diel = int(t.sum()), int((~t).sum())
     return {"false_metal": float(np.sum(e & ~t) / n), "false_dielectric": float(np.sum(~e & t) / n),
+            # Table 4's columns: wrongly metal per true dielectric pixel, wrongly dielectric per true metal
+            # pixel (its rows imply these class-size normalisations); the total is over all pixels
+            "false_metal_rate": float(np.sum(e & ~t) / n_diel) if n_diel else float("nan"),
+            "false_dielectric_rate": float(np.sum(~e & t) / n_metal) if n_metal else float("nan"),
+            "metal_share": float(n_metal / n),
             "total_error": float(np.sum(e != t) / n), "correlation": corr,
             "rmse": float(np.sqrt(np.mean((ef - tf) ** 2)))}
 

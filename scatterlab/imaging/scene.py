@@ -40,26 +40,58 @@ class Scene:
             raise ValueError("labels must index into materials")
 
 
+# the letter template: rectangles (row0, row1, col0, col1) in units of 1/16 of the plate's width
+_LETTERS = (
+    (3, 4.2, 2, 7), (7, 8.2, 2, 7), (11, 12.2, 2, 7),  # "s": three horizontal strokes
+    (3, 8, 2, 3.2), (7, 12, 5.8, 7),  # ... and its two vertical joints
+    (2, 12.2, 10.5, 11.7), (5, 6.2, 8.5, 13.7),  # "t": the vertical stroke and the cross bar
+)
+
+
 def painted_plate(n: int = 256, *, metal: complex = 1.44 - 16j, paint: complex = 1.39 - 0.34j,
                   metal_roughness: float = 0.15, paint_roughness: float = 0.3, theta: float = np.radians(50),
-                  scratches: int = 3, rng=None) -> Scene:
+                  scratches: int = 3, zoom: float = 1.0, center=(8.0, 8.0), rng=None) -> Scene:
     """A painted metal plate with bare-metal letter strokes ("s" and "t" as block strokes) and scratches, seen
     at theta_i = theta_r (the scenes of Figs. 47, 49-61). Defaults: aluminium and green paint at 1550 nm.
 
-    Labels: 0 paint, 1 bare metal (letters), 2 scratches (bare metal, smoother).
+    Parameters
+    ----------
+    n : int
+        Field size [pixels] (square).
+    metal, paint : complex
+        Indices ``n - j kappa``.
+    metal_roughness, paint_roughness : float
+        Per-axis rms facet slopes (scratches: a third of the metal's).
+    theta : float
+        Specular angle [rad].
+    scratches : int
+        Number of random straight scratches (about 1 pixel wide).
+    zoom : float
+        Magnification of the letter template: 1 shows the whole "st" (letter strokes n/13 wide); 2 shows a
+        field half as wide, e.g. the right side of the "s" and the left side of the "t" as in Figs. 49-52.
+    center : (float, float)
+        Field centre (row, column) in template units (the template is 16 units wide; the "s" spans columns
+        2-7, the "t" 8.5-13.7).
+    rng : optional
+        Seeds the scratches.
+
+    Returns
+    -------
+    Scene
+        Labels 0 paint, 1 bare metal (letters), 2 scratches (bare metal, smoother).
     """
+    if not (isinstance(n, (int, np.integer)) and n >= 8):
+        raise ValueError(f"n must be an integer >= 8 pixels, got {n!r}")
+    if not (np.isfinite(zoom) and 0.25 <= zoom <= 16):
+        raise ValueError(f"zoom must be in [0.25, 16], got {zoom!r}")
     rng = np.random.default_rng(rng)
-    lab = np.zeros((n, n), int)
-    u = n / 16
-    # "s": three horizontal strokes and two vertical joints
-    for r0 in (3, 7, 11):
-        lab[int(r0 * u):int((r0 + 1.2) * u), int(2 * u):int(7 * u)] = 1
-    lab[int(3 * u):int(8 * u), int(2 * u):int(3.2 * u)] = 1
-    lab[int(7 * u):int(12 * u), int(5.8 * u):int(7 * u)] = 1
-    # "t": a vertical stroke and a cross bar
-    lab[int(2 * u):int(12.2 * u), int(10.5 * u):int(11.7 * u)] = 1
-    lab[int(5 * u):int(6.2 * u), int(8.5 * u):int(13.7 * u)] = 1
+    u = n * zoom / 16  # pixels per template unit
     yy, xx = np.mgrid[0:n, 0:n]
+    ty = (yy + 0.5 - n / 2) / u + float(center[0])
+    tx = (xx + 0.5 - n / 2) / u + float(center[1])
+    lab = np.zeros((n, n), int)
+    for r0, r1, c0, c1 in _LETTERS:
+        lab[(ty >= r0) & (ty < r1) & (tx >= c0) & (tx < c1)] = 1
     for _ in range(scratches):
         a = rng.uniform(0, np.pi)
         c = rng.uniform(0.2 * n, 0.8 * n, 2)

@@ -31,7 +31,15 @@ def test_pipeline_writes_results_and_report(tmp_path):
         L = g["loglik_corrected"][()]
         assert np.all(np.diff(L) >= -1e-9 * np.abs(L[1:]))
     s = json.loads((tmp_path / "summary.json").read_text())
-    assert set(s["plates"]["aluminium"]) == {"no_turbulence", "D_r0_7.9_degraded", "D_r0_7.9_corrected"}
+    assert set(s["plates"]["aluminium"]) == {"no_turbulence", "no_turbulence_unrestored", "D_r0_7.9_degraded",
+                                             "D_r0_7.9_corrected"}
+    post = s["plates"]["aluminium"]["no_turbulence"]["posterior_paint"]
+    for q in ("n", "kappa"):  # the truth beside every estimate, and whether each interval covers it
+        e = post[q]
+        assert e["ci68"][0] <= e["median"] <= e["ci68"][1] and e["ci95"][0] <= e["ci68"][0]
+        assert e["covers68"] == (e["ci68"][0] <= e["truth"] <= e["ci68"][1])
+    assert s["seed"] == 20101210 and "numpy" in s["versions"] and s["scene"]["image_size"] == 32
+    assert "Checks against the truth" in text and "covered 68 / 95 %" in text
     assert not (tmp_path / "results.h5.part").exists()
     with pytest.raises(FileExistsError):
         characterize(tiny(), tmp_path)
@@ -105,27 +113,28 @@ def test_deconvolutions_are_checkpointed_and_resumed(tmp_path, monkeypatch):
     results; the checkpoints go once the results are written."""
     import json
 
-    from scatterlab.characterization import pipeline
+    from scatterlab.characterization import restoration
 
     cfg = tiny(estimate=["classes"])
     calls = []
-    real = pipeline._deconvolve
+    real = restoration._em
 
-    def counting(task):
+    def counting(*a, **k):
         calls.append(1)
         if len(calls) == 2:
             raise KeyboardInterrupt  # the second deconvolution is interrupted
-        return real(task)
+        return real(*a, **k)
 
-    monkeypatch.setattr(pipeline, "_deconvolve", counting)
+    monkeypatch.setattr(restoration, "_em", counting)
     with pytest.raises(KeyboardInterrupt):
         characterize(cfg, tmp_path / "run")
     assert len(list((tmp_path / "run" / "checkpoints").glob("*.npz"))) == 1
     assert not (tmp_path / "run" / "results.h5").exists()
     resumed = []
-    monkeypatch.setattr(pipeline, "_deconvolve", lambda task: resumed.append(1) or real(task))
-    characterize(cfg, tmp_path / "run", overwrite=True)
-    assert len(resumed) == 1  # two acquisitions, one read back from its checkpoint
+    monkeypatch.setattr(restoration, "_em", lambda *a, **k: resumed.append(1) or real(*a, **k))
+    characterize(cfg, tmp_path / "run")  # a plain rerun finishes an unfinished run
+    total = len(cfg.geometry_deg) * (1 + len(cfg.d_over_r0))
+    assert len(resumed) == total - 1  # one read back from its checkpoint
     assert not (tmp_path / "run" / "checkpoints").exists()
     characterize(tiny(estimate=["classes"]), tmp_path / "fresh")
     a = json.loads((tmp_path / "run" / "summary.json").read_text())["plates"]
@@ -141,8 +150,9 @@ def test_cli_quick_run_infers_the_region_noise(tmp_path):
     assert main(["characterize", "--quick", "--out", str(tmp_path / "q")]) == 0
     s = json.loads((tmp_path / "q" / "summary.json").read_text())["plates"]
     post = s["aluminium"]["D_r0_7.9_corrected"]["posterior_paint"]
-    assert set(post) == {"n", "kappa", "noise"} and post["noise"][0] > 0
-    assert "DOLP noise" in (tmp_path / "q" / "report.md").read_text()
+    assert {"n", "kappa", "noise", "converged", "dolp_bias_corrected"} <= set(post)
+    assert post["noise"]["median"] > 0 and len(post["dolp_mean"]) == 3
+    assert "covered 68 / 95 %" in (tmp_path / "q" / "report.md").read_text()
     bad = tmp_path / "bad.toml"
     bad.write_text("image_size = 7\n")
     assert main(["characterize", str(bad), "--out", str(tmp_path / "b")]) == 2

@@ -28,19 +28,19 @@ def test_correction_beats_degraded_images_at_three_turbulence_strengths():
     labels = painted_plate(n, theta=np.radians(50), rng=rng).labels
     sel = interior((n, n), n // 16)
     o = observe(Plate(), labels, [np.radians(50)], cfg, rng, priors=PRIOR_SETS["ch5"])[0]
-    ref = o["no_turbulence"]["degraded"]
+    ref = o.images[("no_turbulence", "restored")]
     metal = (labels > 0).astype(int)
     for case in ("D_r0_7.9", "D_r0_10.5", "D_r0_12.9"):
-        deg, cor = o[case]["degraded"], o[case]["corrected"]
+        deg, cor = o.images[(case, "degraded")], o.images[(case, "corrected")]
         # against the object (the deconvolution's target) ...
-        assert _rmse(cor["dolp"], o["truth_dolp"], sel) < _rmse(deg["dolp"], o["truth_dolp"], sel), case
-        assert _rel_s0(cor["s0"], o["truth_s0"], sel) < _rel_s0(deg["s0"], o["truth_s0"], sel), case
-        # ... and against the no-turbulence image, the estimate seen through the diffraction-limited system
-        assert _rmse(cor["reimaged_dolp"], ref["dolp"], sel) < _rmse(deg["dolp"], ref["dolp"], sel), case
-        assert _rel_s0(cor["reimaged_s0"], ref["s0"], sel) < _rel_s0(deg["s0"], ref["s0"], sel), case
+        assert _rmse(cor.dolp, o.truth_dolp, sel) < _rmse(deg.dolp, o.truth_dolp, sel), case
+        assert _rel_s0(cor.s0, o.truth_s0, sel) < _rel_s0(deg.s0, o.truth_s0, sel), case
+        # ... and against the no-turbulence image restored with its known PSF
+        assert _rmse(cor.dolp, ref.dolp, sel) < _rmse(deg.dolp, ref.dolp, sel), case
+        assert _rel_s0(cor.s0, ref.s0, sel) < _rel_s0(deg.s0, ref.s0, sel), case
         # classification: EM with the Ch. V priors against the 0.30 DOLP threshold of the degraded image
-        e_cor = classification_errors(cor["classes"], metal, mask=sel)["total_error"]
-        e_deg = classification_errors(deg["classes"], metal, mask=sel)["total_error"]
+        e_cor = classification_errors(cor.classes, metal, mask=sel)["total_error"]
+        e_deg = classification_errors(deg.classes, metal, mask=sel)["total_error"]
         assert e_cor < e_deg, (case, e_cor, e_deg)
 
 

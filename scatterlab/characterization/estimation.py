@@ -1,0 +1,216 @@
+r"""Inversion stage: n and kappa per pixel and per region from the registered DOLP over the geometries.
+
+Per pixel, :func:`scatterlab.inversion.fit_dolp` (sigma known, as in the reference text) gives maps of n and
+kappa with their Laplace errors (Table 5, Figs. 59-61).
+
+Per region (paint, bare metal) the posterior of (n, kappa) is sampled from the region's mean DOLP at each
+geometry. The region is the label map eroded by ``margin`` object pixels, so that pixels where the two
+materials mix through the PSF (edge mixing) stay out. Each geometry's region mean carries an error estimate
+built from what the data themselves show:
+
+* statistical: the pixel scatter over :math:`\sqrt{N_{eff}}`, with :math:`N_{eff}` the number of
+  resolution elements in the region (pixels are correlated over a PSF width, about
+  :math:`(2/\cos\theta)` object pixels along the plane of incidence and 2 across, at 2 pixels per
+  :math:`\lambda/D`);
+* edge sensitivity: the change of the region mean when the margin is doubled, a direct measure of the halo
+  and edge mixing that remain after restoration;
+
+added in quadrature; on top of these a common DOLP noise is inferred from the scatter of the region means
+about the model (log-uniform prior), which absorbs what neither estimate sees (deconvolution artefacts, model
+error). The error budget (``studies/characterization_error_budget.py``) and the calibration study
+(``studies/characterization_coverage.py``) measure how well these intervals cover the truth.
+"""
+
+from __future__ import annotations
+
+import inspect
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+
+__all__ = ["RegionData", "RegionEstimate", "PixelMaps", "region_masks", "region_data", "pixel_maps",
+           "region_posteriors", "default_margin"]
+
+PARAMS = ("n", "kappa")
+
+
+@dataclass
+class RegionData:
+    """Region-mean DOLP over the geometries and its error estimate.
+
+    Attributes
+    ----------
+    name : str
+    mean : ndarray, shape (M,)
+        Region-mean DOLP per geometry.
+    error : ndarray, shape (M,)
+        Its standard error: statistical and edge sensitivity in quadrature.
+    statistical, edge : ndarray, shape (M,)
+        The two parts.
+    pixels : int
+        Pixels in the (eroded) region.
+    truth : tuple of float or None
+        (n, kappa) of the material when known (simulation).
+    bias : ndarray, shape (M,), or None
+        Re-simulated restoration bias already subtracted from ``mean``
+        (:mod:`~scatterlab.characterization.self_calibration`).
+    """
+
+    name: str
+    mean: np.ndarray
+    error: np.ndarray
+    statistical: np.ndarray
+    edge: np.ndarray
+    pixels: int
+    truth: tuple | None = None
+    bias: np.ndarray | None = None
+
+
+@dataclass
+class RegionEstimate:
+    """Posterior summary of one region.
+
+    Attributes
+    ----------
+    name : str
+    parameters : dict
+        Per parameter (``n``, ``kappa``, ``noise``): ``{"median", "ci68": [lo, hi], "ci95": [lo, hi]}``, plus
+        ``"truth"``, ``"covers68"``, ``"covers95"`` when the truth is known.
+    converged : bool
+    warnings : list of str
+        Convergence and identifiability warnings, shown beside the numbers in the report.
+    chain : ndarray, shape (S, 3)
+        Posterior samples of (n, kappa, sigma).
+    data : RegionData
+    """
+
+    name: str
+    parameters: dict
+    converged: bool
+    warnings: list = field(default_factory=list)
+    chain: np.ndarray | None = None
+    data: RegionData | None = None
+
+
+@dataclass
+class PixelMaps:
+    """Per-pixel least-squares n and kappa (maps (H, W)) with their Laplace standard errors (H, W, 2)."""
+
+    n: np.ndarray
+    kappa: np.ndarray
+    errors: np.ndarray
+
+
+def default_margin(theta_max: float) -> int:
+    """Erosion of the region masks [object pixels]: one lambda/D (2 pixels) stretched by 1/cos(theta_max)."""
+    return int(np.ceil(2.0 / np.cos(theta_max)))
+
+
+def region_masks(labels, interior, margin: int) -> dict:
+    """Paint (label 0) and bare-metal (label 1) masks eroded by ``margin`` pixels, within ``interior``."""
+    labels = np.asarray(labels)
+    out = {}
+    for name, lab in (("paint", 0), ("metal", 1)):
+        m = labels == lab
+        if margin > 0:
+            m = ndimage.binary_erosion(m, iterations=margin, border_value=1)
+        out[name] = m & interior
+    return out
+
+
+def region_data(name, stack, labels, interior, margin, thetas, truth=None) -> RegionData:
+    """Region means and their error estimate (module docstring) for a DOLP stack ``(M, H, W)``."""
+    lab = {"paint": 0, "metal": 1}[name]
+    masks = {}
+    for k in (margin, 2 * margin):
+        m = np.asarray(labels) == lab
+        if k > 0:
+            m = ndimage.binary_erosion(m, iterations=k, border_value=1)
+        masks[k] = m & interior
+    sel = masks[margin]
+    if sel.sum() < 4:
+        raise ValueError(f"the {name} region has {int(sel.sum())} pixels after an erosion of {margin} pixels: "
+                         "too few for a region estimate (a larger image_size or a smaller margin)")
+    vals = stack[:, sel]
+    mean = np.nanmean(vals, axis=1)
+    cells = 4.0 / np.cos(np.asarray(thetas))  # pixels per resolution element (object coordinates)
+    n_eff = np.maximum(np.sum(np.isfinite(vals), axis=1) / cells, 1.0)
+    stat = np.nanstd(vals, axis=1) / np.sqrt(n_eff)
+    inner = masks[2 * margin]
+    edge = np.abs(np.nanmean(stack[:, inner], axis=1) - mean) if inner.sum() >= 4 else np.abs(stat)
+    return RegionData(name, mean, np.hypot(stat, edge), stat, edge, int(sel.sum()), truth)
+
+
+def pixel_maps(stack, thetas, sigma) -> PixelMaps:
+    """Per-pixel n and kappa from a DOLP stack ``(M, H, W)`` at specular geometries ``thetas`` [rad]."""
+    from scatterlab.inversion import fit_dolp
+
+    fit = fit_dolp(np.moveaxis(stack, 0, -1), thetas, thetas, sigma=sigma)
+    return PixelMaps(fit.n, fit.kappa, fit.errors)
+
+
+def _summarise(name, post, data: RegionData) -> RegionEstimate:
+    s = post.summary()
+    params = {}
+    for p in ("n", "kappa", "noise"):
+        if p not in s["parameters"]:
+            continue
+        d = s["parameters"][p]
+        entry = {"median": float(d["median"]), "ci68": [float(x) for x in d["ci68"]]}
+        if "ci95" in d:
+            entry["ci95"] = [float(x) for x in d["ci95"]]
+        if data.truth is not None and p in PARAMS:
+            t = float(data.truth[PARAMS.index(p)])
+            entry.update(truth=t, covers68=bool(entry["ci68"][0] <= t <= entry["ci68"][1]),
+                         covers95=bool(entry["ci95"][0] <= t <= entry["ci95"][1]))
+        params[p] = entry
+    notes = []
+    diag = s.get("diagnostics", {})
+    converged = bool(diag.get("converged", True))
+    if not converged:
+        notes.append("the chain did not converge (too short for its autocorrelation time): "
+                     "the interval is a rough guide only")
+    if diag.get("multimodal"):
+        notes.append("the posterior has several modes: the median lies between them")
+    return RegionEstimate(name, params, converged, notes, post.chain, data)
+
+
+def region_posteriors(regions, thetas, sigma, rng, *, n_steps=None, executor=None) -> list:
+    """Sample the posterior of (n, kappa) for each :class:`RegionData` (one emcee problem per region).
+
+    Parameters
+    ----------
+    regions : list of RegionData
+    thetas : ndarray, shape (M,)
+        Specular geometries [rad].
+    sigma : float
+        Known roughness.
+    rng : numpy.random.Generator
+    n_steps : int, optional
+        Fixed chain length (None: until converged).
+    executor : optional
+        Runs the regions in parallel.
+
+    Returns
+    -------
+    list of RegionEstimate
+    """
+    from scatterlab.inversion import ConvergenceWarning, sample_posteriors
+
+    thetas = np.asarray(thetas, float)
+    means = np.stack([r.mean for r in regions])
+    errors = np.stack([r.error for r in regions])
+    kw = dict(sigma=sigma, n_steps=n_steps, executor=executor)
+    noise = None
+    if thetas.size < 3:  # (n, kappa) from two geometries: no data left to infer a noise level
+        noise = max(float(errors.max()), 1e-4)
+    elif "systematic" in inspect.signature(sample_posteriors).parameters:
+        kw.update(systematic=errors, noise_bounds=(1e-4, 0.5))
+    else:  # the per-geometry error as the floor of the inferred noise
+        kw.update(noise_bounds=(max(float(errors.max()), 1e-4), 0.5))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        posts = sample_posteriors(means, thetas, thetas, noise, rng, **kw)
+    return [_summarise(r.name, p, r) for r, p in zip(regions, posts)]
