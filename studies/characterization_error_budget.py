@@ -38,7 +38,7 @@ def _scene(quick, seed):
     cfg.estimate = ["classes", "n_kappa"]
     cfg.plates = cfg.plates[:1]  # aluminium: the metal whose DOLP (~0.01) is hardest to measure
     if quick:
-        cfg.image_size, cfg.geometry_deg, cfg.d_over_r0, cfg.iterations = 64, [30, 45, 60], [7.9], 20
+        cfg.image_size, cfg.geometry_deg, cfg.d_over_r0, cfg.iterations = 64, [35, 55], [7.9], 8
     return cfg
 
 

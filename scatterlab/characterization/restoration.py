@@ -167,10 +167,11 @@ def restore(acq: Acquisition, settings: RestoreSettings, seed: int, ideal: Ideal
     Returns
     -------
     Restoration
-        ``kind`` is ``"restored"`` for a known PSF and ``"corrected"`` for blind deconvolution.
+        ``kind`` is ``"restored"`` for the no-turbulence image (known PSF) and ``"corrected"`` for a
+        turbulent one (blind, or with the true PSF under ``Ideal(psf=True)``).
     """
     known = ideal.psf or acq.d_over_r0 is None
-    kind = "restored" if known else "corrected"
+    kind = "restored" if acq.d_over_r0 is None else "corrected"
     path = None
     if settings.checkpoint:
         path = Path(settings.checkpoint) / f"{_digest(acq, settings, ideal, seed)}.npz"
