@@ -1,15 +1,12 @@
-"""Shared helpers for study scripts (not a study: the runner skips files starting with '_')."""
+"""Shared helpers of the studies (not a study: the runner skips modules starting with '_').
+
+Imported as ``scatterlab.studies._common``; the pyplot accessor ``plt`` is
+:func:`scatterlab.plotting.headless_pyplot`, shared with the reports.
+"""
 
 import numpy as np
 
-
-def plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as pyplot
-
-    return pyplot
+from scatterlab.plotting import headless_pyplot as plt
 
 
 def rms_slope_from_degrees(deg):

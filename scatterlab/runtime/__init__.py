@@ -1,4 +1,8 @@
-"""Runtime services: executors for sweeps, progress bars, atomic results I/O, timing, the study runner."""
+"""Runtime services: executors for sweeps, progress bars, atomic results I/O, timing.
+
+The bottom layer: it imports nothing else from scatterlab. The study runner is
+:mod:`scatterlab.study_runner`.
+"""
 
 from scatterlab.runtime.executors import (
     DaskExecutor,
