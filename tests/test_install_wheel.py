@@ -78,6 +78,7 @@ def test_wheel_installs_and_runs_outside_the_repository(tmp_path):
     tops = {n.split("/", 1)[0] for n in names}
     assert tops == {"scatterlab", next(t for t in tops if t.endswith(".dist-info"))}, tops
     assert "scatterlab/studies/fig4_fresnel_reflectances.py" in names
+    assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names), "the license ships in the wheel"
     assert "scatterlab/studies/performance/perf_phase_screens.py" in names
     assert _source_packages() <= {n.rsplit("/", 1)[0].replace("/", ".") for n in names}
     npz = sorted(p.name for p in (ROOT / "scatterlab" / "pbrdf" / "data").glob("*.npz"))
