@@ -130,3 +130,11 @@ def test_scenes_hold_the_texts_experiments():
             ("aluminium", 1.44, 16.0), ("steel", 3.60, 5.88)]
     quick = load_scene(SCENES / "quick.toml")
     assert quick.image_size <= 64 and quick.iterations <= 20
+
+
+def test_prior_sets_of_the_code_are_the_published_priors():
+    from scatterlab.deconvolution import PRIOR_SETS
+
+    published = {(r["prior_set"], r["class"]): (r["c2"], r["c3"], r["m"]) for r in table("dolp_priors").rows()}
+    coded = {(k, p.name): (p.c2, p.c3, p.m) for k, ps in PRIOR_SETS.items() for p in ps}
+    assert coded == published
