@@ -1,18 +1,19 @@
 """The reference text's published numbers, read from the CSV files shipped with the package.
 
-Tables 1-5, the DOLP priors of Fig. 45 and Chs. V-VII, the classification thresholds and the complex indices
-the text uses, transcribed from the text (each file's comment lines say from where, and what the columns
-mean). Studies and reports compare with these instead of numbers typed into code.
+Tables 1-5, the DOLP priors of Fig. 45 and Chs. V-VII, the classification thresholds and the
+complex indices the text uses, transcribed from the text (each file's comment lines say from where,
+and what the columns mean). Studies and reports compare with these instead of numbers typed into
+code.
 
 Files
 -----
-The repository's ``data/reference/`` folder is the source of truth (edit there). The package ships the same
-files in ``scatterlab/data/reference/`` so that the library finds them after a normal install; a test checks
-that the two folders are identical (copy the files over after an edit).
+The repository's ``data/reference/`` folder is the source of truth (edit there). The package ships
+the same files in ``scatterlab/data/reference/`` so that the library finds them after a normal
+install; a test checks that the two folders are identical (copy the files over after an edit).
 
 Format: ``#`` comment lines (provenance), then one header line of ``name [unit]`` columns (``[1]``
-dimensionless, ``[-]`` text), then the rows. Numeric columns become float arrays, with NaN where a cell is
-empty (a value the text does not give); text columns become arrays of str.
+dimensionless, ``[-]`` text), then the rows. Numeric columns become float arrays, with NaN where a
+cell is empty (a value the text does not give); text columns become arrays of str.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ class ReferenceTable:
     columns : dict of str -> ndarray, shape ``(rows,)``
         float (NaN for an empty cell) or str, by column name (without unit).
     units : dict of str -> str
-        Unit of each column as written in the header (``"deg"``, ``"um"``, ``"1"``; ``"-"`` for text).
+        Unit of each column as in the header (``"deg"``, ``"um"``, ``"1"``; ``"-"`` for text).
     notes : str
         The file's comment lines: where the numbers come from and what they mean.
     """
@@ -61,11 +62,16 @@ class ReferenceTable:
 
     def rows(self) -> list[dict]:
         """The rows as dicts ``{column: value}`` (floats and str)."""
-        return [{k: v[i].item() if isinstance(v[i], np.generic) else v[i] for k, v in self.columns.items()}
-                for i in range(len(self))]
+        return [
+            {
+                k: v[i].item() if isinstance(v[i], np.generic) else v[i]
+                for k, v in self.columns.items()
+            }
+            for i in range(len(self))
+        ]
 
     def where(self, **match) -> list[dict]:
-        """Rows whose columns equal the given values, e.g. ``where(sample="steel", image="degraded")``."""
+        """Rows whose columns equal the given values, e.g. ``where(sample="steel")``."""
         return [r for r in self.rows() if all(r[k] == v for k, v in match.items())]
 
 
@@ -108,7 +114,9 @@ def read_reference_csv(text: str, name: str = "table") -> ReferenceTable:
     """
     lines = text.splitlines()
     notes = "\n".join(x[1:].strip() for x in lines if x.startswith("#"))
-    rows = list(csv.reader(io.StringIO("\n".join(x for x in lines if x.strip() and not x.startswith("#")))))
+    rows = list(
+        csv.reader(io.StringIO("\n".join(x for x in lines if x.strip() and not x.startswith("#"))))
+    )
     if len(rows) < 2:
         raise ValueError(f"{name}: needs a header line and at least one row")
     cols, units = [], {}

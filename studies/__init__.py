@@ -1,4 +1,4 @@
-"""The studies: one module per reproduced figure or table of the reference text, plus ``performance``.
+"""The studies: one module per reproduced figure or table of the reference text; ``performance``.
 
 This folder sits at the top of the repository and is installed as the package
 ``scatterlab.studies`` (``package-dir`` in pyproject.toml), so that the studies run after a

@@ -84,13 +84,17 @@ def test_stopwatch_and_best_time():
 
 
 def test_deprecated_runner_alias_is_lazy():
-    # importing runtime and the deprecated alias scatterlab.runtime.studies loads nothing of an upper layer:
+    # importing runtime and the deprecated alias scatterlab.runtime.studies loads no upper layer:
     # the study runner moved to scatterlab.study_runner
     import subprocess
     import sys
 
-    code = ("import sys, scatterlab; before = set(sys.modules); "
-            "import scatterlab.runtime, scatterlab.runtime.studies; "
-            "print(sorted(m for m in set(sys.modules) - before if m.startswith('scatterlab')))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    code = (
+        "import sys, scatterlab; before = set(sys.modules); "
+        "import scatterlab.runtime, scatterlab.runtime.studies; "
+        "print(sorted(m for m in set(sys.modules) - before if m.startswith('scatterlab')))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
     assert out.strip() == "['scatterlab.runtime.studies']"

@@ -1,4 +1,4 @@
-"""Every study runs in quick mode and writes its figures, metrics and report (the examples are tested)."""
+"""Every study runs in quick mode and writes its figures, metrics and report (examples tested)."""
 
 import json
 import sys
@@ -52,9 +52,11 @@ def test_studies_are_a_package_and_leave_the_import_path_alone():
         assert st.module.__name__.rsplit(".", 1)[1] == st.path.stem
     # a study file named like a package (studies/coverage.py) must not shadow that package
     assert "coverage" not in sys.modules or not sys.modules["coverage"].__file__.startswith(
-        str(studies.studies_dir()))
+        str(studies.studies_dir())
+    )
     assert "fig4" in found and found["perf_phase_screens"].module.__name__.endswith(
-        "performance.perf_phase_screens")
+        "performance.perf_phase_screens"
+    )
 
 
 def test_old_runner_location_still_works_with_a_deprecation_warning():

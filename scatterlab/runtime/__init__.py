@@ -25,8 +25,22 @@ from scatterlab.runtime.results import (
 from scatterlab.runtime.timing import Stopwatch, best_time, throughput
 
 __all__ = [
-    "Executor", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "TaskError", "get_executor", "chunks",
-    "progress", "progress_enabled",
-    "atomic_write_bytes", "write_text", "write_json", "read_json", "write_npz", "to_jsonable",
-    "Stopwatch", "best_time", "throughput",
+    "Executor",
+    "SerialExecutor",
+    "ProcessExecutor",
+    "DaskExecutor",
+    "TaskError",
+    "get_executor",
+    "chunks",
+    "progress",
+    "progress_enabled",
+    "atomic_write_bytes",
+    "write_text",
+    "write_json",
+    "read_json",
+    "write_npz",
+    "to_jsonable",
+    "Stopwatch",
+    "best_time",
+    "throughput",
 ]

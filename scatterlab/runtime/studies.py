@@ -9,15 +9,19 @@ from __future__ import annotations
 
 import warnings
 
-__all__ = ["Study", "StudyContext", "studies_dir", "discover", "run_study", "run_all",
-           "package_versions"]
+__all__: list[str] = []  # a deprecated alias: it defines no names of its own
 
 
 def __getattr__(name: str):
-    if name not in __all__:
+    if name.startswith("__"):  # module protocol probes do not load the runner
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    warnings.warn("scatterlab.runtime.studies is deprecated; import from scatterlab.study_runner",
-                  DeprecationWarning, stacklevel=2)
     from scatterlab import study_runner
 
+    if name not in study_runner.__all__:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn(
+        "scatterlab.runtime.studies is deprecated; import from scatterlab.study_runner",
+        DeprecationWarning,
+        stacklevel=2,
+    )
     return getattr(study_runner, name)
