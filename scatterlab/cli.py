@@ -30,7 +30,7 @@ def _executor(args):
 
 
 def _study(args) -> int:
-    from scatterlab.runtime import studies
+    from scatterlab import study_runner as studies
 
     if args.action == "list":
         for sid, st in studies.discover().items():

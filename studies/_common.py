@@ -1,30 +1,42 @@
-"""Shared helpers for study scripts (not a study: the runner skips files starting with '_')."""
+"""Shared helpers of the studies (not a study: the runner skips modules starting with '_').
+
+Imported as ``scatterlab.studies._common``; the pyplot accessor ``plt`` is
+:func:`scatterlab.plotting.headless_pyplot`, shared with the reports.
+"""
 
 import numpy as np
 
-
-def plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as pyplot
-
-    return pyplot
+from scatterlab.plotting import headless_pyplot as plt
 
 
 def rms_slope_from_degrees(deg):
-    """The reference's "n deg rms slope roughness" read as a per-axis rms slope sigma = tan(n deg)."""
+    """The reference's "n deg rms slope roughness" as a per-axis rms slope sigma = tan(n deg)."""
     return np.tan(np.radians(deg))
 
 
 def imperfect_1064_instrument():
     """The reference's switched wave-plate ellipsometer with fixed, realistic imperfections."""
-    from scatterlab.ellipsometry import Errors, Instrument, switched_wave_plate_psa, switched_wave_plate_psg
+    from scatterlab.ellipsometry import (
+        Errors,
+        Instrument,
+        switched_wave_plate_psa,
+        switched_wave_plate_psg,
+    )
 
-    psg = switched_wave_plate_psg(Errors(retardance=(0.05, -0.03, 0.04, 0.06), azimuth=(0.02, -0.01, 0.03, 0.0),
-                                         extinction_ratio=1e-3))
-    psa = switched_wave_plate_psa(Errors(retardance=(0.03, 0.02, -0.04, 0.01), azimuth=(-0.02, 0.01, 0.0, 0.02),
-                                         extinction_ratio=2e-3))
+    psg = switched_wave_plate_psg(
+        Errors(
+            retardance=(0.05, -0.03, 0.04, 0.06),
+            azimuth=(0.02, -0.01, 0.03, 0.0),
+            extinction_ratio=1e-3,
+        )
+    )
+    psa = switched_wave_plate_psa(
+        Errors(
+            retardance=(0.03, 0.02, -0.04, 0.01),
+            azimuth=(-0.02, 0.01, 0.0, 0.02),
+            extinction_ratio=2e-3,
+        )
+    )
     return Instrument(psg, psa, name="switched wave-plate, 1064 nm")
 
 
@@ -33,20 +45,23 @@ REF_NOMINAL = np.radians([0.0, 60.0, 120.0, 45.0])
 
 
 def calibrate(instrument, rng, noise, repeats=1, **kw):
-    """ECM with the reference's set (polarizer at 0/60/120 deg, quarter-wave plate at 45 deg), slightly misaligned."""
+    """ECM with the reference's set (polarizer at 0/60/120 deg, quarter-wave plate at 45 deg),
+    slightly misaligned."""
     from scatterlab.ellipsometry import ecm_calibrate
     from scatterlab.polarization import linear_polarizer, linear_retarder
 
     samples = [linear_polarizer(a, 1e-4) * 0.9 for a in REF_TRUE_AZ[:3]]
     samples.append(linear_retarder(np.radians(88), REF_TRUE_AZ[3]) * 0.95)
     B0 = instrument.measure(np.eye(4), rng, noise=noise, repeats=repeats)[0]
-    refs = [(k, instrument.measure(M, rng, noise=noise, repeats=repeats)[0], a)
-            for k, M, a in zip(["polarizer"] * 3 + ["retarder"], samples, REF_NOMINAL)]
+    refs = [
+        (k, instrument.measure(M, rng, noise=noise, repeats=repeats)[0], a)
+        for k, M, a in zip(["polarizer"] * 3 + ["retarder"], samples, REF_NOMINAL)
+    ]
     return ecm_calibrate(B0, refs, **kw)
 
 
 def mueller_figure_study(ctx, eta, sigma, label, published_fit, literature_name):
-    """Figs. 41-42: synthetic Mueller measurements of a rough metal vs the pBRDF, and the best-fit index."""
+    """Figs. 41-42: synthetic Mueller measurements of a rough metal vs the pBRDF; best-fit index."""
     from scatterlab.ellipsometry import fit_mueller_elements, normalised_elements
     from scatterlab.pbrdf import Model
 
@@ -72,58 +87,103 @@ def mueller_figure_study(ctx, eta, sigma, label, published_fit, literature_name)
     fine = np.radians(np.linspace(5, 85, 161))
     curve = normalised_elements(model.mueller(eta, fine, fine, np.pi))
     fitted = normalised_elements(Model(fit.sigma).mueller(fit.eta, fine, fine, np.pi))
-    fig, grid = pyplot.subplots(2, 4, figsize=(15, 5.5), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
+    fig, grid = pyplot.subplots(
+        2, 4, figsize=(15, 5.5), sharex=True, gridspec_kw={"height_ratios": [3, 1]}
+    )
     axes, raxes = grid[0], grid[1]
     names = ["M01/M00", "M11/M00", "M22/M00", "M23/M00"]
     fit_at_data = normalised_elements(Model(fit.sigma).mueller(fit.eta, theta, theta, np.pi))
     for k, rax in enumerate(raxes):
-        rax.errorbar(np.degrees(theta), mean[:, k] - fit_at_data[:, k], yerr=std[:, k] / np.sqrt(repeats), fmt="o", ms=3)
+        rax.errorbar(
+            np.degrees(theta),
+            mean[:, k] - fit_at_data[:, k],
+            yerr=std[:, k] / np.sqrt(repeats),
+            fmt="o",
+            ms=3,
+        )
         rax.axhline(0, color="k", lw=0.5)
         rax.set(xlabel=r"$\theta_i = \theta_r$ [deg]", ylabel="data - fit" if k == 0 else None)
     for k, ax in enumerate(axes):
-        ax.errorbar(np.degrees(theta), mean[:, k], yerr=std[:, k], fmt="o", ms=4, label=f"synthetic ({repeats} repeats)")
-        ax.plot(np.degrees(fine), curve[:, k], "-", label=f"pBRDF, eta = {eta.real:.4g} - j{-eta.imag:.4g}")
-        ax.plot(np.degrees(fine), fitted[:, k], "--", label=f"best fit {fit.n:.4f} - j{fit.kappa:.4f}")
+        ax.errorbar(
+            np.degrees(theta),
+            mean[:, k],
+            yerr=std[:, k],
+            fmt="o",
+            ms=4,
+            label=f"synthetic ({repeats} repeats)",
+        )
+        ax.plot(
+            np.degrees(fine),
+            curve[:, k],
+            "-",
+            label=f"pBRDF, eta = {eta.real:.4g} - j{-eta.imag:.4g}",
+        )
+        ax.plot(
+            np.degrees(fine), fitted[:, k], "--", label=f"best fit {fit.n:.4f} - j{fit.kappa:.4f}"
+        )
         ax.set(title=names[k])
     axes[0].legend(fontsize=7)
     ctx.save_figure(fig, label)
     err = fit.errors
-    ctx.metrics.update({
-        "eta_true": eta, "sigma_true": sigma, "n_fit": fit.n, "kappa_fit": fit.kappa, "sigma_fit": fit.sigma,
-        "n_err_1sigma": err[0], "kappa_err_1sigma": err[1], "sigma_err_1sigma": err[2],
-        "published_fit_on_real_data": published_fit, "repeats": repeats, "noise_per_reading": noise,
-        "ecm_quality": cal.quality, "cond_W": cal.cond_W, "cond_A": cal.cond_A,
-        "max_abs_error_of_mean_elements": float(np.max(np.abs(mean - truth))),
-        "azimuth_errors_deg": list(np.degrees(np.array([r["azimuth"] for r in cal.references]) - REF_TRUE_AZ)),
-    })
-    z = np.abs(np.array([fit.n - eta.real, fit.kappa + eta.imag, fit.sigma - sigma]) / np.maximum(err, 1e-300))
+    ctx.metrics.update(
+        {
+            "eta_true": eta,
+            "sigma_true": sigma,
+            "n_fit": fit.n,
+            "kappa_fit": fit.kappa,
+            "sigma_fit": fit.sigma,
+            "n_err_1sigma": err[0],
+            "kappa_err_1sigma": err[1],
+            "sigma_err_1sigma": err[2],
+            "published_fit_on_real_data": published_fit,
+            "repeats": repeats,
+            "noise_per_reading": noise,
+            "ecm_quality": cal.quality,
+            "cond_W": cal.cond_W,
+            "cond_A": cal.cond_A,
+            "max_abs_error_of_mean_elements": float(np.max(np.abs(mean - truth))),
+            "azimuth_errors_deg": list(
+                np.degrees(np.array([r["azimuth"] for r in cal.references]) - REF_TRUE_AZ)
+            ),
+        }
+    )
+    z = np.abs(
+        np.array([fit.n - eta.real, fit.kappa + eta.imag, fit.sigma - sigma])
+        / np.maximum(err, 1e-300)
+    )
     ctx.metrics["fit_deviation_in_sigmas"] = list(z)
+    dev = ctx.metrics["max_abs_error_of_mean_elements"]
     ctx.say(
-        f"Synthetic {literature_name} (eta = {eta.real} - j{-eta.imag}, roughness {sigma}) measured at 1.064 um "
-        f"through an imperfect switched wave-plate ellipsometer (cond W = {cal.cond_W:.2f}, cond A = "
-        f"{cal.cond_A:.2f}) calibrated by ECM from the reference's set, {repeats} repeats of noise {noise} per "
-        f"reading. The means agree with the pBRDF to {ctx.metrics['max_abs_error_of_mean_elements']:.1e}; the fit "
-        f"recovers eta = {fit.n:.4f} - j{fit.kappa:.4f} and sigma = {fit.sigma:.4f}, i.e. |dn| = "
-        f"{abs(fit.n - eta.real):.4f}, |dkappa| = {abs(fit.kappa + eta.imag):.4f}, |dsigma| = {abs(fit.sigma - sigma):.4f}. "
-        f"Its standard errors ({err[0]:.4f}, {err[1]:.4f}, {err[2]:.1e}) count only the repeat noise of the sample "
-        f"measurements, so the deviation is {max(z):.1f} of them: the rest is the calibration's own error (W and A "
-        "from noisy references), common to all angles, which averaging the sample more cannot remove."
+        f"Synthetic {literature_name} (eta = {eta.real} - j{-eta.imag}, roughness {sigma}) "
+        f"measured at 1.064 um through an imperfect switched wave-plate ellipsometer "
+        f"(cond W = {cal.cond_W:.2f}, cond A = {cal.cond_A:.2f}) calibrated by ECM from the "
+        f"reference's set, {repeats} repeats of noise {noise} per reading. The means agree with "
+        f"the pBRDF to {dev:.1e}; the fit recovers eta = {fit.n:.4f} - j{fit.kappa:.4f} and "
+        f"sigma = {fit.sigma:.4f}, i.e. |dn| = {abs(fit.n - eta.real):.4f}, "
+        f"|dkappa| = {abs(fit.kappa + eta.imag):.4f}, |dsigma| = {abs(fit.sigma - sigma):.4f}. "
+        f"Its standard errors ({err[0]:.4f}, {err[1]:.4f}, {err[2]:.1e}) count only the repeat "
+        f"noise of the sample measurements, so the deviation is {max(z):.1f} of them: the rest is "
+        "the calibration's own error (W and A from noisy references), common to all angles, which "
+        "averaging the sample more cannot remove."
     )
     ctx.say(
-        f"On its real data the reference found {published_fit} instead of the literature value: a real sample "
-        "differs from the model (surface oxide or contamination, multiple scattering and depolarisation beyond "
-        "the single-bounce facet model, a non-Gaussian slope distribution, the bulk index of a sprayed or "
-        "plated coating). Synthetic data generated by the model itself cannot reproduce that shift; they show "
-        "the accuracy of the measurement chain and the fit (a few 1e-3 in eta here), far smaller than the "
+        f"On its real data the reference found {published_fit} instead of the literature value: "
+        "a real sample differs from the model (surface oxide or contamination, multiple "
+        "scattering and depolarisation beyond the single-bounce facet model, a non-Gaussian slope "
+        "distribution, the bulk index of a sprayed or plated coating). Synthetic data generated "
+        "by the model itself cannot reproduce that shift; they show the accuracy of the "
+        "measurement chain and the fit (a few 1e-3 in eta here), far smaller than the "
         "differences the reference reports."
     )
 
 
-def plate_observations(ctx, theta_deg, d_over_r0, *, priors, iterations, size, reps=1, adaptive=False,
-                       plates=None):
-    """Simulated painted plates (Figs. 47-61) at one specular geometry, through turbulence, corrected by the
-    EM with ``priors`` and registered: {plate name: [observation per repetition]} (see
-    ``scatterlab.characterization.pipeline.observe``); the D/r0 list may give one value per plate."""
+def plate_observations(
+    ctx, theta_deg, d_over_r0, *, priors, iterations, size, reps=1, adaptive=False, plates=None
+):
+    """Simulated painted plates (Figs. 47-61) at one specular geometry, through turbulence,
+    corrected by the EM with ``priors`` and registered: {plate name: [observation per repetition]}
+    (see ``scatterlab.characterization.pipeline.observe``); the D/r0 list may give one value per
+    plate."""
     from scatterlab.characterization import SceneConfig
     from scatterlab.characterization.pipeline import observe
     from scatterlab.characterization.scene_config import Plate
@@ -133,10 +193,28 @@ def plate_observations(ctx, theta_deg, d_over_r0, *, priors, iterations, size, r
     out = {}
     for k, plate in enumerate(plates):
         dr = d_over_r0[k] if isinstance(d_over_r0[0], (list, tuple)) else d_over_r0
-        cfg = SceneConfig(image_size=size, geometry_deg=[theta_deg], d_over_r0=list(dr), iterations=iterations,
-                          plates=[plate])
+        cfg = SceneConfig(
+            image_size=size,
+            geometry_deg=[theta_deg],
+            d_over_r0=list(dr),
+            iterations=iterations,
+            plates=[plate],
+        )
         labels = painted_plate(size, theta=np.radians(theta_deg), rng=ctx.rng).labels
-        out[plate.metal] = {"labels": labels, "obs": [
-            observe(plate, labels, [np.radians(theta_deg)], cfg, ctx.rng, priors=priors, executor=ctx.executor,
-                    adaptive=adaptive)[0] for _ in range(reps)]}
+        out[plate.metal] = {
+            "labels": labels,
+            "obs": [
+                observe(
+                    plate,
+                    labels,
+                    [np.radians(theta_deg)],
+                    cfg,
+                    ctx.rng,
+                    priors=priors,
+                    executor=ctx.executor,
+                    adaptive=adaptive,
+                )[0]
+                for _ in range(reps)
+            ],
+        }
     return out

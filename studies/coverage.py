@@ -6,16 +6,12 @@ nominal level, the fraction of trials whose equal-tailed interval contains the t
 binomial standard error band. Calibrated intervals lie on the diagonal.
 """
 
-import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.inversion import ConvergenceWarning, model_dolp, sample_posteriors  # noqa: E402
+from scatterlab.inversion import ConvergenceWarning, model_dolp, sample_posteriors
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "coverage", "title": "Calibration curve of the posterior credible intervals",
          "reproduces": "our own study (issue: honest uncertainty)"}

@@ -4,15 +4,10 @@ Which geometries determine sigma? The reference (Fig. 58) notes that specular sw
 sweeping theta_r at fixed theta_i. Bounds for DOLP noise 1e-3, 7 measurements per design.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.inversion import crlb  # noqa: E402
+from scatterlab.inversion import crlb
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "design", "title": "Cramer-Rao bounds of n, kappa, sigma against the measurement geometry",
          "reproduces": "Sec. 7.3 remark on Fig. 58 (off-specular sweeps to determine sigma)"}

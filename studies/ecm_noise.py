@@ -1,16 +1,12 @@
 """Mueller-matrix error against detector noise for ECM-calibrated, ideally calibrated (true W, A) and
 uncalibrated (nominal design W, A) instruments (own study, Sec. 4.4 / Ref. 25)."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import calibrate, imperfect_1064_instrument, plt  # noqa: E402
-
-from scatterlab.ellipsometry import switched_wave_plate_psa, switched_wave_plate_psg  # noqa: E402
-from scatterlab.polarization import diattenuator, linear_retarder  # noqa: E402
+from scatterlab.ellipsometry import switched_wave_plate_psa, switched_wave_plate_psg
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.polarization import diattenuator, linear_retarder
+from scatterlab.studies._common import calibrate, imperfect_1064_instrument
 
 STUDY = {"id": "ecm_noise", "title": "Mueller error vs noise: ECM, ideal and uncalibrated instruments",
          "reproduces": "own study (ECM, Ref. 25)"}

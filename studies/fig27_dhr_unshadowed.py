@@ -6,15 +6,11 @@ upper-hemisphere integral (Eq. 174 with G = 1) by quadrature. Roughness "n deg r
 per-axis rms slope sigma = tan(n deg).
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt, rms_slope_from_degrees  # noqa: E402
-
-from scatterlab.pbrdf import dhr_beckmann, dhr_sphere_unshadowed  # noqa: E402
+from scatterlab.pbrdf import dhr_beckmann, dhr_sphere_unshadowed
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.studies._common import rms_slope_from_degrees
 
 STUDY = {"id": "fig27", "title": "DHR of the unshadowed Priest-Germer pBRDF (PEC)",
          "reproduces": "Fig. 27 (Sec. 3.2.3)"}

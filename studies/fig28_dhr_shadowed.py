@@ -4,15 +4,11 @@ Upper-hemisphere DHR (Eq. 174) by the slope-space quadrature of scatterlab.pbrdf
 slope" read as sigma = tan(n deg). The reference states that the shadowed DHRs never exceed 1.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt, rms_slope_from_degrees  # noqa: E402
-
-from scatterlab.pbrdf import dhr_beckmann  # noqa: E402
+from scatterlab.pbrdf import dhr_beckmann
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.studies._common import rms_slope_from_degrees
 
 STUDY = {"id": "fig28", "title": "DHR of the shadowed vs unshadowed pBRDF (PEC)",
          "reproduces": "Fig. 28 (Sec. 3.2.3)"}

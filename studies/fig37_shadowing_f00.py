@@ -1,14 +1,9 @@
 """Fig. 37: F00 of the Priest-Germer pBRDF vs the shadowed pBRDF (Eq. 173), specular plane, PEC, roughness 0.3."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.pbrdf import PEC, Model  # noqa: E402
+from scatterlab.pbrdf import PEC, Model
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "fig37", "title": "F00 of the Priest-Germer vs the shadowed pBRDF",
          "reproduces": "Fig. 37 (Sec. 4.2.1)"}

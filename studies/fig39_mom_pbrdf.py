@@ -12,16 +12,11 @@ sigma_GO = p(tan a) cos(theta_i - a) / (2 cos^3 a cos theta_i), a = (theta_i - t
 (facets lit at the local incidence theta_i - a = (theta_i + theta_s)/2; integrates to about 1).
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.mom import correlation_length_for_slope, incoherent_scattering, rough_surface  # noqa: E402
-from scatterlab.pbrdf import PEC, Model  # noqa: E402
+from scatterlab.mom import correlation_length_for_slope, incoherent_scattering, rough_surface
+from scatterlab.pbrdf import PEC, Model
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "fig39", "title": "Rough PEC reflectance: method of moments vs pBRDF",
          "reproduces": "Fig. 39 (Sec. 4.3)"}

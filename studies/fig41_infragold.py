@@ -1,11 +1,7 @@
 """Fig. 41: Mueller elements of LabSphere Infragold (gold, 0.285 - j7.3523, roughness 0.44) at 1.064 um,
 synthetic measurements through an ECM-calibrated imperfect ellipsometer, against the pBRDF; best-fit index."""
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import mueller_figure_study  # noqa: E402
+from scatterlab.studies._common import mueller_figure_study
 
 STUDY = {"id": "fig41", "title": "Mueller elements of Infragold: synthetic ECM measurement and pBRDF fit",
          "reproduces": "Fig. 41 (Sec. 4.4)"}

@@ -1,11 +1,7 @@
 """Fig. 42: Mueller elements of flame-sprayed aluminium (1.226 - j10.413, roughness 0.43) at 1.064 um,
 synthetic measurements through an ECM-calibrated imperfect ellipsometer, against the pBRDF; best-fit index."""
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import mueller_figure_study  # noqa: E402
+from scatterlab.studies._common import mueller_figure_study
 
 STUDY = {"id": "fig42", "title": "Mueller elements of flame-sprayed aluminium: synthetic ECM measurement and fit",
          "reproduces": "Fig. 42 (Sec. 4.4)"}

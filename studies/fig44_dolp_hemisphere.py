@@ -4,17 +4,12 @@ roughness 0.1 and 0.6, with the shadowed pBRDF and its diffuse term (Eq. 177); p
 Indices as in the figure caption: Al 1.44 - j16, Fe 3.60 - j5.88, glass 1.44, Teflon 1.35.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab import materials  # noqa: E402
-from scatterlab.pbrdf import Model  # noqa: E402
-from scatterlab.plotting import pbrdf_lobe_png, polar_contour  # noqa: E402
+from scatterlab import materials
+from scatterlab.pbrdf import Model
+from scatterlab.plotting import pbrdf_lobe_png, polar_contour
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "fig44", "title": "DOLP over the hemisphere for Al, Fe, glass, Teflon at 1550 nm",
          "reproduces": "Fig. 44 (Sec. 5.2.2)"}

@@ -1,16 +1,11 @@
 """Fig. 48: simulated long-exposure MTFs for D/r0 = 7.9, 10.5, 12.9 against Fried's theory, with r0 fitted
 from each simulated MTF (the reference's check of its turbulence simulator)."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.imaging import (circular_pupil, diffraction_mtf, fit_r0, long_exposure_mtf, mtf, phase_screen,  # noqa: E402
+from scatterlab.imaging import (circular_pupil, diffraction_mtf, fit_r0, long_exposure_mtf, mtf, phase_screen,
                                 psf, radial_profile)
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "fig48", "title": "Long-exposure MTFs against theory, with fitted r0",
          "reproduces": "Fig. 48 (Sec. 5.3)"}

@@ -7,16 +7,12 @@ the EM iterations runs without priors and two-means on that corrected DOLP histo
 for the second half. Painted aluminium at D/r0 = 7.9 and painted steel at 12.9 (as the figures), simulated.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plate_observations, plt  # noqa: E402
-
-from scatterlab.characterization.pipeline import interior  # noqa: E402
-from scatterlab.deconvolution import PRIOR_SETS, classification_errors  # noqa: E402
+from scatterlab.characterization.pipeline import interior
+from scatterlab.deconvolution import PRIOR_SETS, classification_errors
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.studies._common import plate_observations
 
 STUDY = {"id": "fig51_fig52", "title": "Near-normal classification (24 deg): fixed against adaptive DOLP priors",
          "reproduces": "Figs. 51-52 (Sec. 5.3.4) and the adaptive priors of Sec. 8.1.1"}

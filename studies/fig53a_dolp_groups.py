@@ -4,16 +4,11 @@ iron group (Fe, Ti, Ni, Cr) and dielectrics (Teflon, glass, alumina), from the c
 The reference does not state the roughness of Fig. 53a; we use 0.3 (and report 0.1 too).
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab import materials  # noqa: E402
-from scatterlab.pbrdf import Model  # noqa: E402
+from scatterlab import materials
+from scatterlab.pbrdf import Model
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "fig53a", "title": "DOLP of the aluminium group, iron group and dielectrics",
          "reproduces": "Fig. 53a (Sec. 6.2)"}

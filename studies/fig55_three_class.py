@@ -2,16 +2,12 @@
 theta_i = theta_r = 55 deg; painted aluminium at D/r0 = 7.9, painted steel at 12.9 (Figs. 54-55), simulated.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plate_observations, plt  # noqa: E402
-
-from scatterlab.characterization.pipeline import interior  # noqa: E402
-from scatterlab.deconvolution import PRIOR_SETS  # noqa: E402
+from scatterlab.characterization.pipeline import interior
+from scatterlab.deconvolution import PRIOR_SETS
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.studies._common import plate_observations
 
 STUDY = {"id": "fig55", "title": "Aluminium / iron / dielectric classification through turbulence (Ch. VI)",
          "reproduces": "Figs. 54-55 (Sec. 6.3)"}

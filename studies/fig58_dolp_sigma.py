@@ -3,15 +3,10 @@
 Shows the reference's point that specular-only sweeps hardly constrain sigma.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.pbrdf import Model  # noqa: E402
+from scatterlab.pbrdf import Model
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "fig58", "title": "DOLP vs roughness at specular geometries (glass, iron)",
          "reproduces": "Fig. 58 (Sec. 7.3)"}

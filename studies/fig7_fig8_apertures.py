@@ -1,15 +1,10 @@
 """Figs. 7-8: diffraction-limited and turbulence-degraded images of one object through three apertures
 (D/r0 about 43 at the largest), with their PSFs."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.imaging import circular_pupil, convolve, painted_plate, phase_screen, psf, render_stokes  # noqa: E402
+from scatterlab.imaging import circular_pupil, convolve, painted_plate, phase_screen, psf, render_stokes
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "fig7_fig8", "title": "Diffraction-limited and turbulence-degraded images through three apertures",
          "reproduces": "Figs. 7 and 8 (Sec. 2.8)"}

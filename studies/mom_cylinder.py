@@ -1,16 +1,12 @@
 """MoM validation: bistatic echo width of a PEC circular cylinder (TM) against the exact series solution."""
 
-import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.mom import PlaneWave, cylinder_echo_width, solve_tm  # noqa: E402
+from scatterlab.mom import PlaneWave, cylinder_echo_width, solve_tm
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "mom_cylinder", "title": "MoM echo width of a PEC cylinder vs the exact series",
          "reproduces": "own validation (issue 4): exact PEC cylinder series"}

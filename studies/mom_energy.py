@@ -1,14 +1,9 @@
 """MoM energy balance: the integrated scattering coefficient of rough PEC surfaces against incidence and slope."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.mom import TaperedWave, correlation_length_for_slope, rough_surface, solve_tm  # noqa: E402
+from scatterlab.mom import TaperedWave, correlation_length_for_slope, rough_surface, solve_tm
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "mom_energy", "title": "MoM energy conservation vs incidence angle and roughness",
          "reproduces": "own validation (issue 4): conservation of energy (Tsang et al.'s passive-sensing grade)"}

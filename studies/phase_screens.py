@@ -1,15 +1,10 @@
 """Phase-screen structure function with and without subharmonics, against 6.88 (r/r0)^(5/3) (own study;
 the errata to Eq. 79 note the low-frequency deficit of plain FFT screens)."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.imaging import turbulence as T  # noqa: E402
+from scatterlab.imaging import turbulence as T
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "phase_screens", "title": "Phase-screen structure function with and without subharmonics",
          "reproduces": "own study (Eqs. 71-79 and their errata)"}

@@ -5,15 +5,10 @@ theta_i only (errata to Sec. 4.2.3). We map the relative asymmetry |F00(i, r) - 
 diffuse choices, and check that both conserve the energy of a PEC.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.pbrdf import PEC, Model  # noqa: E402
+from scatterlab.pbrdf import PEC, Model
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "reciprocity", "title": "Reciprocity of the diffuse term: Eq. 177 vs a reciprocal form",
          "reproduces": "own study (errata to Sec. 4.2.3)"}

@@ -2,17 +2,12 @@
 at D/r0 = 7.9, 10.5, 12.9: clean and turbulence-degraded S0 and DOLP through a 4-channel division-of-amplitude
 polarimeter with shot, read and dark noise (Figs. 49-50 scenes)."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.imaging import (ANGLES_0_45_90_135, channel_images, circular_pupil, detect,  # noqa: E402
+from scatterlab.imaging import (ANGLES_0_45_90_135, channel_images, circular_pupil, detect,
                                 dolp_aop_from_stokes, painted_plate, phase_screen, psf, render_stokes,
                                 stokes_from_channels)
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "scenes", "title": "Painted-plate polarimetric scenes, clean and turbulence-degraded",
          "reproduces": "scenes of Figs. 47, 49-50 (Sec. 5.3)"}

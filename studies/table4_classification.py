@@ -7,17 +7,13 @@ screen per acquisition. As in the text the no-turbulence classification is the t
 true labels are scored too. Each D/r0 is repeated over independent screens (mean and spread reported).
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plate_observations, plt  # noqa: E402
-
-from scatterlab.characterization.pipeline import interior  # noqa: E402
-from scatterlab.characterization.reference_tables import TABLE4  # noqa: E402
-from scatterlab.deconvolution import PRIOR_SETS, classification_errors  # noqa: E402
+from scatterlab.characterization.pipeline import interior
+from scatterlab.characterization.reference_tables import TABLE4
+from scatterlab.deconvolution import PRIOR_SETS, classification_errors
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.studies._common import plate_observations
 
 STUDY = {"id": "table4", "title": "Metal/dielectric classification at 50 deg through turbulence (Table 4)",
          "reproduces": "Table 4 (Sec. 5.3.3), Figs. 49-50"}

@@ -6,16 +6,11 @@ painted steel at 1550 nm, specular geometries 30-60 deg, D/r0 7.9 and 12.9 -- an
 means and standard deviations of the per-pixel least-squares n and kappa with Table 5.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.characterization import characterize, default_scene  # noqa: E402
-from scatterlab.characterization.reference_tables import TABLE5  # noqa: E402
+from scatterlab.characterization import characterize, default_scene
+from scatterlab.characterization.reference_tables import TABLE5
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "table5", "title": "Characterization of the painted plates through turbulence (Table 5)",
          "reproduces": "Table 5 and Figs. 59-61 (Sec. 7.3)"}

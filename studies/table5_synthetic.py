@@ -8,17 +8,13 @@ uncertainty report. Compared with Table 5's no-turbulence rows (measured, so als
 calibration; see the report).
 """
 
-import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.inversion import ConvergenceWarning, fit_dolp, model_dolp, sample_posteriors  # noqa: E402
-from scatterlab.inversion.report import posterior_report, report_index  # noqa: E402
+from scatterlab.inversion import ConvergenceWarning, fit_dolp, model_dolp, sample_posteriors
+from scatterlab.inversion.report import posterior_report, report_index
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "table5_synthetic", "title": "Characterization of paint, aluminium and steel from synthetic specular DOLP",
          "reproduces": "Table 5 (Sec. 7.3), no-turbulence rows, on synthetic data"}

@@ -7,17 +7,13 @@ theta_i ranges (evenly spaced), DOP of smooth facets (Eq. 115). Noise: Gaussian 
 confidence half-width of the mean, 1.96 std / sqrt(trials) (it reproduces the published RMSEs with the means).
 """
 
-import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
-
-from scatterlab.inversion import ConvergenceWarning, fit_dolp, sample_posteriors, thilak_two_step  # noqa: E402
-from scatterlab.inversion.thilak import thilak_dop  # noqa: E402
+from scatterlab.inversion import ConvergenceWarning, fit_dolp, sample_posteriors, thilak_two_step
+from scatterlab.inversion.thilak import thilak_dop
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "thilak_tables", "title": "Thilak et al.'s copper Monte-Carlo tables: two-step vs least squares vs posterior",
          "reproduces": "Tables 1 and 2 (Sec. 3.1.2.3)"}

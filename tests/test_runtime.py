@@ -81,3 +81,20 @@ def test_stopwatch_and_best_time():
         sum(range(1000))
     assert sw.times["a"] > 0
     assert runtime.best_time(lambda: sum(range(100)), repeat=2) > 0
+
+
+def test_deprecated_runner_alias_is_lazy():
+    # importing runtime and the deprecated alias scatterlab.runtime.studies loads no upper layer:
+    # the study runner moved to scatterlab.study_runner
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, scatterlab; before = set(sys.modules); "
+        "import scatterlab.runtime, scatterlab.runtime.studies; "
+        "print(sorted(m for m in set(sys.modules) - before if m.startswith('scatterlab')))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
+    assert out.strip() == "['scatterlab.runtime.studies']"

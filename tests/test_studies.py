@@ -1,10 +1,12 @@
-"""Every study runs in quick mode and writes its figures, metrics and report (the examples are tested)."""
+"""Every study runs in quick mode and writes its figures, metrics and report (examples tested)."""
 
 import json
+import sys
+import warnings
 
 import pytest
 
-from scatterlab.runtime import studies
+from scatterlab import study_runner as studies
 
 ALL = studies.discover()
 
@@ -39,3 +41,29 @@ def test_study_refuses_to_overwrite(tmp_path):
 def test_unknown_study():
     with pytest.raises(ValueError, match="unknown study"):
         studies.run_study("fig999", quick=True)
+
+
+def test_studies_are_a_package_and_leave_the_import_path_alone():
+    before = list(sys.path)
+    found = studies.discover()
+    assert sys.path == before, "discovering studies must not touch sys.path"
+    for sid, st in found.items():
+        assert st.module.__name__.startswith("scatterlab.studies."), sid
+        assert st.module.__name__.rsplit(".", 1)[1] == st.path.stem
+    # a study file named like a package (studies/coverage.py) must not shadow that package
+    assert "coverage" not in sys.modules or not sys.modules["coverage"].__file__.startswith(
+        str(studies.studies_dir())
+    )
+    assert "fig4" in found and found["perf_phase_screens"].module.__name__.endswith(
+        "performance.perf_phase_screens"
+    )
+
+
+def test_old_runner_location_still_works_with_a_deprecation_warning():
+    from scatterlab.runtime import studies as old
+
+    with pytest.warns(DeprecationWarning, match="scatterlab.study_runner"):
+        assert old.run_study is studies.run_study
+    with warnings.catch_warnings(), pytest.raises(AttributeError):
+        warnings.simplefilter("ignore")
+        old.no_such_name  # noqa: B018

@@ -1,17 +1,47 @@
 """Plotting helpers (matplotlib and pyvista are imported lazily, inside the functions).
 
-Nothing in the physics imports this package.
+Nothing in the physics imports this package. The studies (``scatterlab.studies``) and the reports
+(characterization, inversion) share these helpers.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["polar_contour", "pbrdf_lobe_png"]
+from scatterlab.polarization import dolp as stokes_dolp
+
+__all__ = ["headless_pyplot", "polar_contour", "pbrdf_lobe_png"]
 
 
-def polar_contour(theta_r, phi, values, *, ax=None, fig=None, levels=20, cmap="viridis", label=None,
-                  vmin=None, vmax=None):
+def headless_pyplot():
+    """``matplotlib.pyplot`` on the non-interactive Agg backend (files only, no display needed).
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``, imported on first use (matplotlib stays a lazy import).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as pyplot
+
+    return pyplot
+
+
+def polar_contour(
+    theta_r,
+    phi,
+    values,
+    *,
+    ax=None,
+    fig=None,
+    levels=20,
+    cmap="viridis",
+    label=None,
+    vmin=None,
+    vmax=None,
+):
     """Filled contour of ``values(theta_r, phi)`` on a polar axis (radius theta_r in degrees).
 
     Parameters
@@ -37,11 +67,14 @@ def polar_contour(theta_r, phi, values, *, ax=None, fig=None, levels=20, cmap="v
     return fig, ax
 
 
-def pbrdf_lobe_png(model, eta, theta_i, path, *, n_theta=90, n_phi=180, window_size=(700, 560), title=None):
+def pbrdf_lobe_png(
+    model, eta, theta_i, path, *, n_theta=90, n_phi=180, window_size=(700, 560), title=None
+):
     """Render the pBRDF lobe ``F00(theta_r, phi)`` as a 3-D surface coloured by DOLP and save a PNG.
 
-    The surface point in direction ``(theta_r, phi)`` sits at radius ``F00 / max F00``. Off-screen
-    pyvista rendering; returns the path.
+    The surface point in direction ``(theta_r, phi)`` sits at radius ``F00 / max F00``; its colour
+    is the DOLP of the scattered light for unpolarized illumination (NaN, pyvista's NaN colour,
+    where no light is scattered). Off-screen pyvista rendering; returns the path.
     """
     import pyvista as pv
 
@@ -50,7 +83,9 @@ def pbrdf_lobe_png(model, eta, theta_i, path, *, n_theta=90, n_phi=180, window_s
     TR, PH = np.meshgrid(tr, ph, indexing="ij")
     F = model.mueller_linear(eta, np.full_like(TR, theta_i), TR, PH)
     f00 = F[..., 0, 0]
-    dolp = np.clip(np.hypot(F[..., 1, 0], F[..., 2, 0]) / np.maximum(f00, 1e-300), 0, 1)
+    dolp = stokes_dolp(
+        F[..., :, 0]
+    )  # unpolarized illumination: the first column; NaN where F00 = 0
     r = f00 / f00.max()
     x, y, z = r * np.sin(TR) * np.cos(PH), r * np.sin(TR) * np.sin(PH), r * np.cos(TR)
     grid = pv.StructuredGrid(x, y, z)

@@ -1,4 +1,8 @@
-"""Runtime services: executors for sweeps, progress bars, atomic results I/O, timing, the study runner."""
+"""Runtime services: executors for sweeps, progress bars, atomic results I/O, timing.
+
+The bottom layer: it imports nothing else from scatterlab. The study runner is
+:mod:`scatterlab.study_runner`.
+"""
 
 from scatterlab.runtime.executors import (
     DaskExecutor,
@@ -21,8 +25,22 @@ from scatterlab.runtime.results import (
 from scatterlab.runtime.timing import Stopwatch, best_time, throughput
 
 __all__ = [
-    "Executor", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "TaskError", "get_executor", "chunks",
-    "progress", "progress_enabled",
-    "atomic_write_bytes", "write_text", "write_json", "read_json", "write_npz", "to_jsonable",
-    "Stopwatch", "best_time", "throughput",
+    "Executor",
+    "SerialExecutor",
+    "ProcessExecutor",
+    "DaskExecutor",
+    "TaskError",
+    "get_executor",
+    "chunks",
+    "progress",
+    "progress_enabled",
+    "atomic_write_bytes",
+    "write_text",
+    "write_json",
+    "read_json",
+    "write_npz",
+    "to_jsonable",
+    "Stopwatch",
+    "best_time",
+    "throughput",
 ]

@@ -1,18 +1,14 @@
 """Blind deconvolution cost: iterations vs DOLP/S0 error vs time, and the cost of one EM iteration over four
 channels against one scikit-image Richardson-Lucy iteration on one channel of the same size (same run)."""
 
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parents[1]))
-from _common import plt  # noqa: E402
-
-from scatterlab.deconvolution import blind_deconvolve  # noqa: E402
-from scatterlab.imaging import ANGLES_0_45_90_135, channel_images, detect  # noqa: E402
-from scatterlab.runtime import best_time  # noqa: E402
+from scatterlab.deconvolution import blind_deconvolve
+from scatterlab.imaging import ANGLES_0_45_90_135, channel_images, detect
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.runtime import best_time
 
 STUDY = {"id": "perf_deconvolution", "title": "EM blind deconvolution: iterations vs error vs time; cost vs Richardson-Lucy",
          "reproduces": "own performance study (issue 8, item 7)"}

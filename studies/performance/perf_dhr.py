@@ -6,18 +6,14 @@ against a 48-node reference; error is the maximum absolute difference over 19 an
 points, build time, and lookup time per point (2-D spline and the per-model 1-D cache).
 """
 
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parents[1]))
-from _common import plt  # noqa: E402
-
-from scatterlab.pbrdf import Model, dhr_beckmann  # noqa: E402
-from scatterlab.pbrdf.dhr import DHRTable  # noqa: E402
-from scatterlab.runtime import best_time  # noqa: E402
+from scatterlab.pbrdf import Model, dhr_beckmann
+from scatterlab.pbrdf.dhr import DHRTable
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.runtime import best_time
 
 STUDY = {"id": "perf_dhr", "title": "DHR quadrature order and table size: error against run time",
          "reproduces": "own performance study (issue 3, item 10)"}

@@ -1,17 +1,14 @@
 """Ellipsometry accuracy against run time: number of repeats, ECM azimuth-fit tolerance, and the
 throughput of applying a calibration to Mueller-matrix images (vs a per-pixel loop)."""
 
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parents[1]))
-from _common import REF_TRUE_AZ, calibrate, imperfect_1064_instrument, plt  # noqa: E402
-
-from scatterlab.polarization import diattenuator, linear_retarder  # noqa: E402
-from scatterlab.runtime import best_time  # noqa: E402
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.polarization import diattenuator, linear_retarder
+from scatterlab.runtime import best_time
+from scatterlab.studies._common import REF_TRUE_AZ, calibrate, imperfect_1064_instrument
 
 STUDY = {"id": "perf_ecm", "title": "Ellipsometry: repeats and ECM tolerance vs error vs time; image throughput",
          "reproduces": "own performance study (issue 5, item 7)"}

@@ -8,16 +8,12 @@ checked on that subset (cost and parameters). Also: batched time against image s
 (an 11-geometry design that determines it).
 """
 
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parents[1]))
-from _common import plt  # noqa: E402
-
-from scatterlab.inversion import fit_dolp, fit_dolp_per_pixel, model_dolp  # noqa: E402
+from scatterlab.inversion import fit_dolp, fit_dolp_per_pixel, model_dolp
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "perf_inversion", "title": "Batched vs per-pixel least squares of (n, kappa, sigma)",
          "reproduces": "own performance study (issue 6, item 8)"}

@@ -6,17 +6,13 @@ from a long chain in the same run; the error of a shorter chain is the largest q
 of the reference posterior standard deviation, averaged over independent repeats.
 """
 
-import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parents[1]))
-from _common import plt  # noqa: E402
-
-from scatterlab.inversion import ConvergenceWarning, model_dolp, sample_posterior  # noqa: E402
+from scatterlab.inversion import ConvergenceWarning, model_dolp, sample_posterior
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "perf_mcmc", "title": "MCMC length vs quantile error vs time; effective samples per second",
          "reproduces": "own performance study (issue 6, item 8)"}

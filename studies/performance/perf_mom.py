@@ -1,20 +1,16 @@
 """MoM accuracy against run time: sampling vs error (cylinder), partitions vs Monte-Carlo error (Fig. 39
 set-up), LU vs forward-backward against the number of unknowns, and the fill/solve split."""
 
-import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 from scipy import linalg
 
-sys.path.insert(0, str(Path(__file__).parents[1]))
-from _common import plt  # noqa: E402
-
-from scatterlab.mom import (PlaneWave, TaperedWave, contour, correlation_length_for_slope,  # noqa: E402
+from scatterlab.mom import (PlaneWave, TaperedWave, contour, correlation_length_for_slope,
                             cylinder_echo_width, forward_backward, impedance_matrix, incoherent_scattering,
                             rough_surface, solve_tm)
+from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {"id": "perf_mom", "title": "Method of moments: error vs run time, LU vs forward-backward, fill vs solve",
          "reproduces": "own performance study (issue 4, item 8)"}

@@ -6,16 +6,11 @@ same geometries; the results are compared element by element (relative to m00) s
 results. Goals (issue 3): >= 20x the peer's evaluations per second, >= 1e6 in-plane DOLP per second.
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parents[1]))
-from _common import plt  # noqa: E402
-
-from scatterlab.pbrdf import Model  # noqa: E402
-from scatterlab.runtime import best_time  # noqa: E402
+from scatterlab.pbrdf import Model
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.runtime import best_time
 
 STUDY = {"id": "perf_pbrdf", "title": "pBRDF throughput against pySCATMECH",
          "reproduces": "own benchmark (issue 3, item 10)"}

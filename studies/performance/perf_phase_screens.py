@@ -1,16 +1,11 @@
 """Phase screens: subharmonic levels and screen size vs structure-function error vs time, and speed against
 AOtools' ft_sh_phase_screen at 256 and 512 pixels (same run)."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parents[1]))
-from _common import plt  # noqa: E402
-
-from scatterlab.imaging import turbulence as T  # noqa: E402
-from scatterlab.runtime import best_time  # noqa: E402
+from scatterlab.imaging import turbulence as T
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.runtime import best_time
 
 STUDY = {"id": "perf_phase_screens", "title": "Phase screens: accuracy vs time; speed vs AOtools",
          "reproduces": "own performance study (issue 7, items 6 and 8)"}

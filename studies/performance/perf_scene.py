@@ -1,16 +1,10 @@
 """Time to simulate a whole 4-channel 512 x 512 polarimetric scene (render, PSF from a fresh phase screen,
 channels, noise, Stokes estimate) on this machine; goal: under a second (issue 7, item 8)."""
 
-import sys
-from pathlib import Path
-
-
-sys.path.insert(0, str(Path(__file__).parents[1]))
-from _common import plt  # noqa: E402
-
-from scatterlab.imaging import (ANGLES_0_45_90_135, channel_images, circular_pupil, detect, painted_plate,  # noqa: E402
+from scatterlab.imaging import (ANGLES_0_45_90_135, channel_images, circular_pupil, detect, painted_plate,
                                 phase_screen, psf, render_stokes, stokes_from_channels)
-from scatterlab.runtime import Stopwatch, best_time  # noqa: E402
+from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.runtime import Stopwatch, best_time
 
 STUDY = {"id": "perf_scene", "title": "Whole 4-channel 512 x 512 scene simulation time",
          "reproduces": "own performance study (issue 7, item 8)"}

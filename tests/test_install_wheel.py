@@ -1,0 +1,175 @@
+"""A normal (non-editable) install works: the wheel holds the library, its data and the studies.
+
+The slow test builds a wheel from a clean copy of the source tree, installs it with ``--no-deps``
+into a fresh virtual environment that sees this environment's installed dependencies through a
+``.pth`` file (but not the source tree), and runs the command line from a folder outside the
+repository. The fast test checks
+that the explicit package list of pyproject.toml names every package of the source tree.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+import tomllib
+import venv
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+IGNORE = shutil.ignore_patterns(
+    ".git",
+    ".venv",
+    "results",
+    "build",
+    "dist",
+    "*.egg-info",
+    "__pycache__",
+    ".pytest_cache",
+    ".hypothesis",
+    "*.pyc",
+)
+
+
+def _source_packages() -> set[str]:
+    """Dotted names of the packages in the source tree, as the wheel must hold them."""
+    names = {
+        ".".join(p.parent.relative_to(ROOT).parts)
+        for p in (ROOT / "scatterlab").rglob("__init__.py")
+    }
+    names |= {
+        ".".join(("scatterlab",) + p.parent.relative_to(ROOT).parts)
+        for p in (ROOT / "studies").rglob("__init__.py")
+    }
+    return names
+
+
+def test_pyproject_lists_every_package():
+    tool = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert set(tool["packages"]) == _source_packages(), (
+        "pyproject.toml [tool.setuptools] packages must list every package "
+        "(a new subpackage needs a line)"
+    )
+    assert tool["package-dir"] == {"scatterlab.studies": "studies"}
+    assert not (ROOT / "scatterlab" / "studies").exists(), "studies/ stays at the top level"
+
+
+def _run(cmd, cwd, env):
+    done = subprocess.run(
+        [str(c) for c in cmd], cwd=cwd, env=env, capture_output=True, text=True, timeout=900
+    )
+    assert done.returncode == 0, f"{cmd} failed:\n{done.stdout}\n{done.stderr}"
+    return done.stdout
+
+
+def _fresh_env_seeing_installed_dependencies(path: Path) -> Path:
+    """A venv without pip whose sys.path ends with this environment's site-packages (no sources)."""
+    venv.EnvBuilder(with_pip=False).create(path)
+    python = path / ("Scripts/python.exe" if os.name == "nt" else "bin/python")
+    site = Path(
+        _run(
+            [python, "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+            path,
+            _clean_env(),
+        ).strip()
+    )
+    ours = {sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]}
+    (site / "_scatterlab_test_deps.pth").write_text("\n".join(sorted(ours)) + "\n")
+    return python
+
+
+def _clean_env() -> dict:
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("PYTHONPATH", "PYTHONHOME", "SCATTERLAB_STUDIES")
+    }
+    env.update(MPLBACKEND="Agg", SCATTERLAB_PROGRESS="0", OMP_NUM_THREADS="1")
+    return env
+
+
+@pytest.mark.slow
+def test_wheel_installs_and_runs_outside_the_repository(tmp_path):
+    env = _clean_env()
+    src = tmp_path / "src"
+    shutil.copytree(ROOT, src, ignore=IGNORE)
+    _run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--no-deps",
+            "--quiet",
+            "-w",
+            tmp_path / "dist",
+            src,
+        ],
+        tmp_path,
+        env,
+    )
+    (wheel,) = (tmp_path / "dist").glob("scatterlab-*.whl")
+
+    names = zipfile.ZipFile(wheel).namelist()
+    tops = {n.split("/", 1)[0] for n in names}
+    assert tops == {"scatterlab", next(t for t in tops if t.endswith(".dist-info"))}, tops
+    assert "scatterlab/studies/fig4_fresnel_reflectances.py" in names
+    assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names), (
+        "the license ships in the wheel"
+    )
+    assert "scatterlab/studies/performance/perf_phase_screens.py" in names
+    assert _source_packages() <= {n.rsplit("/", 1)[0].replace("/", ".") for n in names}
+    npz = sorted(p.name for p in (ROOT / "scatterlab" / "pbrdf" / "data").glob("*.npz"))
+    assert npz and all(f"scatterlab/pbrdf/data/{n}" in names for n in npz)
+    csv = sorted(p.name for p in (ROOT / "scatterlab" / "data" / "reference").glob("*.csv"))
+    assert csv and all(f"scatterlab/data/reference/{n}" in names for n in csv)
+
+    python = _fresh_env_seeing_installed_dependencies(tmp_path / "venv")
+    _run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "--python",
+            python,
+            "install",
+            "--quiet",
+            "--no-deps",
+            "--no-index",
+            wheel,
+        ],
+        tmp_path,
+        env,
+    )
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    where = _run(
+        [
+            python,
+            "-c",
+            "import scatterlab, scatterlab.studies as s, scatterlab.reference_data as r; "
+            "print(scatterlab.__file__); print(s.__file__); "
+            "print(len(r.table('table4_classification')))",
+        ],
+        work,
+        env,
+    )
+    lib, studies, rows = where.split("\n")[:3]
+    site = str(tmp_path / "venv")
+    assert lib.startswith(site) and studies.startswith(site), where
+    assert rows == "12"
+
+    scatterlab = python.parent / ("scatterlab.exe" if os.name == "nt" else "scatterlab")
+    listing = _run([scatterlab, "study", "list"], work, env)
+    from scatterlab.study_runner import discover
+
+    listed = {line.split()[0] for line in listing.splitlines() if line.strip()}
+    assert listed == set(discover())
+    out = tmp_path / "fig4"
+    _run([scatterlab, "study", "run", "fig4", "--quick", "--out", out], work, env)
+    assert (out / "report.md").is_file() and (out / "fig4.png").is_file()
