@@ -99,10 +99,9 @@ def run(ctx):
 
 
 def _figure(ctx, cov):
-    import matplotlib
+    from scatterlab.plotting import headless_pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = headless_pyplot()
 
     fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
     keys = list(cov)

@@ -83,10 +83,9 @@ def run(ctx):
 
 
 def _figure(ctx, rows, keys):
-    import matplotlib
+    from scatterlab.plotting import headless_pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = headless_pyplot()
 
     names = list(rows)
     quantities = [("dolp_rmse_truth", "DOLP RMSE vs truth"), ("classification_vs_labels", "class error vs labels"),

@@ -19,7 +19,7 @@ def test_study_run_all_writes_index(tmp_path, monkeypatch):
     # every study already runs in tests/test_studies.py: here a folder holding one study is enough
     import shutil
 
-    from scatterlab.runtime.studies import studies_dir
+    from scatterlab.study_runner import studies_dir
 
     folder = tmp_path / "studies"
     folder.mkdir()

@@ -84,13 +84,12 @@ def _title(key: str) -> str:
 def plate_figure(out, result, cfg) -> Path:
     """S0, DOLP and classes at the geometry nearest 50 deg, n and kappa maps (all geometries), one column per
     image, each row with its colour bar and the class map with a legend (Figs. 49-50, 59-61)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
+    from scatterlab.plotting import headless_pyplot
+
+    plt = headless_pyplot()
     kinds = image_kinds(cfg)
     mid = int(np.argmin(np.abs(np.asarray(cfg.geometry_deg) - 50)))
     o = result.observations[mid]
