@@ -44,8 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
-from scatterlab.io.table import (angle_factor, circular_sign, element_name, format_table, length_factor,
-                                 parse_element, read_table, time_convention_flip)
+from scatterlab.io.table import (angle_factor, circular_sign, element_columns, element_name, format_table,
+                                 length_factor, read_table, time_convention_flip)
 
 __all__ = ["MuellerBRDF", "read_mueller_brdf", "write_mueller_brdf", "MIRROR"]
 
@@ -149,37 +149,6 @@ class MuellerBRDF:
 
 
 # ----------------------------------------------------------------------------------------------- reading
-def _elements(table, prefix_err: str):
-    """Map (j, k) 0-based -> (column index, normalised) for values and for standard deviations."""
-    parsed = {}
-    for i, key in enumerate(table.keys):
-        p = parse_element(key)
-        if p is not None:
-            parsed[i] = p
-    if not parsed:
-        raise ValueError(f"{prefix_err}: no Mueller element columns (f_r11 ... f_r44, m11 ... m44 or "
-                         f"m12/m11 ...; columns: {', '.join(table.names)})")
-    digits = {d for (j, k, dn), _, _ in parsed.values() for d in (j, k) + ((dn,) if dn is not None else ())}
-    if 0 in digits and 4 in digits:
-        raise ValueError(f"{prefix_err}: element names mix 0-based (m00) and 1-based (m44) indices")
-    if 0 not in digits and 4 not in digits:
-        raise ValueError(f"{prefix_err}: cannot tell 0-based from 1-based element names (no 0 and no 4 index)")
-    base = 0 if 0 in digits else 1
-    values, stds = {}, {}
-    for i, ((j, k, dn), normalised, is_std) in parsed.items():
-        jk = (j - base, k - base)
-        if not (0 <= jk[0] < 4 and 0 <= jk[1] < 4) or (dn is not None and dn != base):
-            raise ValueError(f"{prefix_err}: column {table.names[i]!r} is not a Mueller element "
-                             f"({'0-based' if base == 0 else '1-based'} names, normalised by the first)")
-        target = stds if is_std else values
-        if jk in target:
-            raise ValueError(f"{prefix_err}: two columns for element {element_name(*jk)}"
-                             f"{' (std)' if is_std else ''}: {table.names[target[jk][0]]!r}, "
-                             f"{table.names[i]!r}")
-        target[jk] = (i, normalised)
-    return values, stds
-
-
 def _mueller(table, values, stds, where):
     """Assemble (N, 4, 4) mueller and std from the element columns; returns (M, std, normalised)."""
     n = table.values.shape[0]
@@ -314,7 +283,7 @@ def read_mueller_brdf(path, columns=None, *, angle_unit: str = "deg", wavelength
         row = int(np.argmax(wavelength <= 0))
         raise ValueError(f"{table.where(row)}, column {table.names[wi]!r}: wavelength must be > 0")
     theta_i, phi_i, theta_r, phi_r, notes = _angles(table, columns, angle_unit)
-    values, stds = _elements(table, where)
+    values, stds = element_columns(table)
     M, S, normalised = _mueller(table, values, stds, where)
     _check_elements(table, M, float(tolerance), where)
     for theta, az, what in ((theta_i, phi_i, "incidence"), (theta_r, phi_r, "observation")):

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["Table", "read_table", "format_table", "ANGLE_UNITS", "LENGTH_UNITS", "angle_factor",
-           "length_factor", "parse_element", "element_name", "TIME_CONVENTIONS", "time_convention_flip"]
+           "length_factor", "parse_element", "element_name", "element_columns", "TIME_CONVENTIONS", "time_convention_flip"]
 
 ANGLE_UNITS = {"deg": np.pi / 180, "rad": 1.0}
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "nm": 1e-9}
@@ -130,6 +130,40 @@ def element_name(j: int, k: int, *, prefix: str = "m", normalised: bool = False,
     """1-based column name of element ``(j, k)`` (0-based indices): ``m12``, ``f_r12/f_r11``, ``std_m12``."""
     name = f"{prefix}{j + 1}{k + 1}" + (f"/{prefix}11" if normalised else "")
     return f"std_{name}" if std else name
+
+
+def element_columns(table, default_base: int | None = None):
+    """Mueller element columns of ``table``: two dicts mapping 0-based ``(j, k)`` to ``(column index,
+    normalised)``, for the values and for their standard deviations (names: module docstring).
+    ``default_base`` (0 or 1) is used when the digits do not tell (no 0 and no 4 index); None refuses."""
+    prefix_err = table.path
+    parsed = {}
+    for i, key in enumerate(table.keys):
+        p = parse_element(key)
+        if p is not None:
+            parsed[i] = p
+    if not parsed:
+        raise ValueError(f"{prefix_err}: no Mueller element columns (f_r11 ... f_r44, m11 ... m44 or "
+                         f"m12/m11 ...; columns: {', '.join(table.names)})")
+    digits = {d for (j, k, dn), _, _ in parsed.values() for d in (j, k) + ((dn,) if dn is not None else ())}
+    if 0 in digits and 4 in digits:
+        raise ValueError(f"{prefix_err}: element names mix 0-based (m00) and 1-based (m44) indices")
+    if 0 not in digits and 4 not in digits and default_base is None:
+        raise ValueError(f"{prefix_err}: cannot tell 0-based from 1-based element names (no 0 and no 4 index)")
+    base = 0 if 0 in digits else 1 if 4 in digits else default_base
+    values, stds = {}, {}
+    for i, ((j, k, dn), normalised, is_std) in parsed.items():
+        jk = (j - base, k - base)
+        if not (0 <= jk[0] < 4 and 0 <= jk[1] < 4) or (dn is not None and dn != base):
+            raise ValueError(f"{prefix_err}: column {table.names[i]!r} is not a Mueller element "
+                             f"({'0-based' if base == 0 else '1-based'} names, normalised by the first)")
+        target = stds if is_std else values
+        if jk in target:
+            raise ValueError(f"{prefix_err}: two columns for element {element_name(*jk)}"
+                             f"{' (std)' if is_std else ''}: {table.names[target[jk][0]]!r}, "
+                             f"{table.names[i]!r}")
+        target[jk] = (i, normalised)
+    return values, stds
 
 
 @dataclass

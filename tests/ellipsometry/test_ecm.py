@@ -108,3 +108,13 @@ def test_ill_conditioned_instrument_warns():
     refs.append(("retarder", inst.intensities(linear_retarder(np.radians(88), NOMINAL[3])), NOMINAL[3]))
     with pytest.warns(RuntimeWarning, match="ill-conditioned"):
         ecm_calibrate(B0, refs)
+
+
+def test_mueller_of_nan_intensities_is_a_clear_error(instrument):
+    cal = ecm_calibrate(*measure_references(instrument))
+    B = instrument.intensities(SAMPLE)
+    B[1, 1] = np.nan
+    with pytest.raises(ValueError, match="B .*finite"):
+        cal.mueller(B)
+    with pytest.raises(ValueError, match="B .*finite"):
+        cal.mueller(np.full((4, 4), np.inf))

@@ -35,3 +35,19 @@ def test_bad_input():
         fit_mueller_elements(THETA, np.zeros((THETA.size, 4)), fit_sigma=False)
     with pytest.raises(ValueError, match="theta"):
         fit_mueller_elements(THETA + 2, np.zeros((THETA.size, 4)))
+
+
+def test_rejects_negative_std_and_elements_outside_the_unit_interval():
+    y = model_elements(THETA, 1.4, 7.0, 0.3)
+    with pytest.raises(ValueError, match="std"):
+        fit_mueller_elements(THETA, y, std=np.full_like(y, -1e-3))
+    with pytest.raises(ValueError, match="std"):
+        fit_mueller_elements(THETA, y, std=np.zeros_like(y))
+    bad = y.copy()
+    bad[2, 1] = 1.2  # e.g. a percent/fraction mix-up or a wrong normalisation
+    with pytest.raises(ValueError, match=r"measured\[2, 1\] = 1.2.*\[-1, 1\]"):
+        fit_mueller_elements(THETA, bad)
+    bad[2, 1] = 1.03  # within the stated tolerance (noise)
+    fit_mueller_elements(THETA, bad, starts=((1.5, 10.0),))
+    with pytest.raises(ValueError, match="starts"):
+        fit_mueller_elements(THETA, y, starts=())
