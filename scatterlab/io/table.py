@@ -271,8 +271,9 @@ def read_table(path) -> Table:
 
 def format_table(names, values, comments=()) -> str:
     """CSV text: ``# comment`` lines, a header of ``names`` and one row per line of ``values`` ``(rows,
-    columns)`` (``repr`` precision: written tables read back bit for bit)."""
+    columns)``, 15 significant digits (unit conversions then read back as written: 30, not 29.999999999999996;
+    the values to ~1e-15 relative)."""
     out = [f"# {c}" for c in comments]
     out.append(",".join(names))
-    out.extend(",".join(repr(float(v)) for v in row) for row in np.asarray(values, float))
+    out.extend(",".join(f"{float(v):.15g}" for v in row) for row in np.asarray(values, float))
     return "\n".join(out) + "\n"
