@@ -71,8 +71,14 @@ def _scatmech_style_file(path, eta=1.39 - 0.34j, sigma=0.3):
     phi = np.r_[np.tile([0.0, np.pi], 6), np.linspace(np.pi / 3, np.pi, 8)]
     M = Model(sigma).mueller(eta, ti, tr, phi)
     M = M + 0.005 * M[:, :1, :1] * rng.standard_normal(M.shape)
-    return write_mueller_brdf(path, MuellerBRDF(1.55e-6, ti, tr, phi, M), normalised=True, signed=True,
-                              time_convention="exp(-iwt)", description="simulated")
+    return write_mueller_brdf(
+        path,
+        MuellerBRDF(1.55e-6, ti, tr, phi, M),
+        normalised=True,
+        signed=True,
+        time_convention="exp(-iwt)",
+        description="simulated",
+    )
 
 
 def test_fit_mueller_fits_a_scatmech_style_file_and_writes_its_report(tmp_path, capsys):
@@ -83,7 +89,9 @@ def test_fit_mueller_fits_a_scatmech_style_file_and_writes_its_report(tmp_path, 
     path = _scatmech_style_file(tmp_path / "paint.csv")
     assert ",-" in path.read_text()  # signed polar angles in the file
     out = tmp_path / "fit"
-    assert main(["fit-mueller", str(path), "--out", str(out), "--time-convention", "exp(-iwt)"]) == 0
+    assert (
+        main(["fit-mueller", str(path), "--out", str(out), "--time-convention", "exp(-iwt)"]) == 0
+    )
     assert "n = 1.39" in capsys.readouterr().out
     metrics = json.loads((out / "metrics.json").read_text())["fit"]
     # 0.5 % noise of m11 on 16 elements x 20 geometries: within 4 standard errors (seed fixed)
@@ -106,8 +114,13 @@ def test_fit_mueller_bad_input_exit_codes(tmp_path, capsys):
     assert main(["fit-mueller", str(tmp_path / "missing.csv"), "--out", str(tmp_path / "o")]) == 2
     assert "missing.csv" in capsys.readouterr().err
     data = read_mueller_brdf(path, time_convention="exp(-iwt)")
-    two = MuellerBRDF(list(data.wavelength) + [1.064e-6], list(data.theta_i) * 1 + [0.3], list(data.theta_r) + [0.3],
-                      list(data.phi) + [3.0], list(data.mueller) + [data.mueller[0]])
+    two = MuellerBRDF(
+        list(data.wavelength) + [1.064e-6],
+        list(data.theta_i) * 1 + [0.3],
+        list(data.theta_r) + [0.3],
+        list(data.phi) + [3.0],
+        list(data.mueller) + [data.mueller[0]],
+    )
     write_mueller_brdf(tmp_path / "two.csv", two)
     assert main(["fit-mueller", str(tmp_path / "two.csv"), "--out", str(tmp_path / "o")]) == 2
     assert "--wavelength-um" in capsys.readouterr().err

@@ -1,4 +1,6 @@
-"""Report of a pBRDF fit to a measured Mueller BRDF (``scatterlab fit-mueller``): figures, Markdown, metrics.
+"""Report of a pBRDF fit to a measured Mueller BRDF (``scatterlab fit-mueller``).
+
+Figures, Markdown and metrics.
 
 Imported by the command line only; matplotlib is imported inside the plotting functions.
 """
@@ -21,8 +23,8 @@ def _normalised(M):
 
 
 def plot_elements(data, fit, path):
-    """4x4 panels of measured against predicted elements (F00 absolute, log axes; the others normalised by
-    F00), with the 1:1 line. Returns the figure path."""
+    """4x4 panels of measured against predicted elements (F00 absolute, log axes; the others
+    normalised by F00), with the 1:1 line. Returns the figure path."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -37,8 +39,14 @@ def plot_elements(data, fit, path):
             if (j, k) == (0, 0):
                 x, y = data.mueller[:, 0, 0], fit.predicted[:, 0, 0]
                 if data.normalised:
-                    ax.text(0.5, 0.5, "normalised data:\nno absolute m11", ha="center", va="center",
-                            transform=ax.transAxes)
+                    ax.text(
+                        0.5,
+                        0.5,
+                        "normalised data:\nno absolute m11",
+                        ha="center",
+                        va="center",
+                        transform=ax.transAxes,
+                    )
                     ax.set_axis_off()
                     continue
                 ax.set_xscale("log")
@@ -60,7 +68,10 @@ def plot_elements(data, fit, path):
             if k == 0:
                 ax.set_ylabel("pBRDF fit", fontsize=8)
             ax.tick_params(labelsize=7)
-    fig.suptitle(f"measured vs fitted pBRDF: n = {fit.n:.4g}, kappa = {fit.kappa:.4g}, sigma = {fit.sigma:.4g}")
+    fig.suptitle(
+        f"measured vs fitted pBRDF: n = {fit.n:.4g}, kappa = {fit.kappa:.4g}, sigma = "
+        f"{fit.sigma:.4g}"
+    )
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
@@ -85,8 +96,10 @@ def plot_residuals(fit, path):
             ax.tick_params(labelsize=7)
     for ax in axes[3]:
         ax.set_xlabel("row", fontsize=8)
-    fig.suptitle("weighted residuals (model - data) / " + ("std" if fit.weighted else
-                                                           ("1" if fit.normalised else "measured m11")))
+    fig.suptitle(
+        "weighted residuals (model - data) / "
+        + ("std" if fit.weighted else ("1" if fit.normalised else "measured m11"))
+    )
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
@@ -95,42 +108,81 @@ def plot_residuals(fit, path):
 def _markdown(data, fit, source, convention, seconds) -> str:
     e = fit.errors
     dep = fit.depolarization
-    lines = [f"# pBRDF fit to {Path(source).name}", "",
-             f"Data: {len(data)} geometries at {fit.wavelength * 1e6:.6g} um "
-             f"({'normalised elements' if fit.normalised else 'absolute elements'}"
-             f"{', weighted by their standard deviations' if fit.weighted else ''}); file read with time "
-             f"convention {convention}. Model: `pbrdf.Model(sigma, shadowing={fit.options['shadowing']!r}, "
-             f"diffuse={fit.options['diffuse']!r})`, all {15 if fit.normalised else 16} elements.", "",
-             "| parameter | value | 1-sigma |", "|---|---|---|",
-             f"| n | {fit.n:.6g} | {e[0]:.3g} |", f"| kappa | {fit.kappa:.6g} | {e[1]:.3g} |",
-             f"| sigma (rms facet slope) | {fit.sigma:.6g} | {e[2]:.3g} |", "",
-             (f"Reduced chi^2 = {fit.reduced_chi2:.4g} ({fit.dof} degrees of freedom)" if fit.weighted else
-              f"RMS residual {np.sqrt(fit.reduced_chi2):.3g}" + ("" if fit.normalised else " of the measured m11")
-              + f" ({fit.dof} degrees of freedom); without standard deviations the errors take this scatter "
-              "as the noise") + f"; fit {'converged' if fit.success else 'did NOT converge'}; run time "
-             f"{seconds:.1f} s.", ""]
+    lines = [
+        f"# pBRDF fit to {Path(source).name}",
+        "",
+        f"Data: {len(data)} geometries at {fit.wavelength * 1e6:.6g} um "
+        f"({'normalised elements' if fit.normalised else 'absolute elements'}"
+        f"{', weighted by their standard deviations' if fit.weighted else ''}); file read with "
+        "time "
+        f"convention {convention}. Model: `pbrdf.Model(sigma, "
+        f"shadowing={fit.options['shadowing']!r}, "
+        f"diffuse={fit.options['diffuse']!r})`, all {15 if fit.normalised else 16} elements.",
+        "",
+        "| parameter | value | 1-sigma |",
+        "|---|---|---|",
+        f"| n | {fit.n:.6g} | {e[0]:.3g} |",
+        f"| kappa | {fit.kappa:.6g} | {e[1]:.3g} |",
+        f"| sigma (rms facet slope) | {fit.sigma:.6g} | {e[2]:.3g} |",
+        "",
+        (
+            f"Reduced chi^2 = {fit.reduced_chi2:.4g} ({fit.dof} degrees of freedom)"
+            if fit.weighted
+            else f"RMS residual {np.sqrt(fit.reduced_chi2):.3g}"
+            + ("" if fit.normalised else " of the measured m11")
+            + f" ({fit.dof} degrees of freedom); without standard deviations the errors take this "
+            "scatter "
+            "as the noise"
+        )
+        + f"; fit {'converged' if fit.success else 'did NOT converge'}; run time "
+        f"{seconds:.1f} s.",
+        "",
+    ]
     if not fit.determined:
-        lines += ["**The data do not determine all three parameters** (rank-deficient Jacobian): the errors are "
-                  "infinite. Add incidence angles or out-of-plane geometries.", ""]
+        lines += [
+            "**The data do not determine all three parameters** (rank-deficient Jacobian): the "
+            "errors are "
+            "infinite. Add incidence angles or out-of-plane geometries.",
+            "",
+        ]
     if fit.circular_flip_ratio < 0.25:
-        lines += [f"**Time convention?** The data fit {1 / fit.circular_flip_ratio:.3g} times better (in cost) "
-                  "with their circular elements sign-flipped: the file is probably in the other time convention "
-                  "(`--time-convention`).", ""]
+        lines += [
+            f"**Time convention?** The data fit {1 / fit.circular_flip_ratio:.3g} times better (in "
+            "cost) "
+            "with their circular elements sign-flipped: the file is probably in the other time "
+            "convention "
+            "(`--time-convention`).",
+            "",
+        ]
     explained = dep["explained"]
-    lines += ["## Depolarization", "",
-              f"Mean depolarization 1 - P_Delta: measured {dep['measured_mean']:.4g}, pBRDF {dep['model_mean']:.4g}. "
-              + (f"The pBRDF's diffuse term explains {100 * explained:.0f} % of the measured depolarization."
-                 if np.isfinite(explained) else "The sample barely depolarizes (mean < 1e-3).")
-              + " (Noise adds to the sum of squared elements and hides depolarization of its own size.)", "",
-              "## Figures", "", "![measured vs predicted elements](elements.png)", "",
-              "![weighted residuals per element](residuals.png)", ""]
+    lines += [
+        "## Depolarization",
+        "",
+        f"Mean depolarization 1 - P_Delta: measured {dep['measured_mean']:.4g}, pBRDF "
+        f"{dep['model_mean']:.4g}. "
+        + (
+            f"The pBRDF's diffuse term explains {100 * explained:.0f} % of the measured "
+            "depolarization."
+            if np.isfinite(explained)
+            else "The sample barely depolarizes (mean < 1e-3)."
+        )
+        + " (Noise adds to the sum of squared elements and hides depolarization of its own size.)",
+        "",
+        "## Figures",
+        "",
+        "![measured vs predicted elements](elements.png)",
+        "",
+        "![weighted residuals per element](residuals.png)",
+        "",
+    ]
     if data.notes:
         lines += ["## Reading the file", ""] + [f"- {n}" for n in data.notes] + [""]
     return "\n".join(lines)
 
 
-def write_fit_report(data, fit, out, *, source="", convention="exp(+jwt)", seconds=0.0,
-                     overwrite: bool = False) -> Path:
+def write_fit_report(
+    data, fit, out, *, source="", convention="exp(+jwt)", seconds=0.0, overwrite: bool = False
+) -> Path:
     """Write ``elements.png``, ``residuals.png``, ``metrics.json`` and ``report.md`` into ``out``.
 
     Parameters
@@ -166,9 +218,19 @@ def write_fit_report(data, fit, out, *, source="", convention="exp(+jwt)", secon
     out.mkdir(parents=True, exist_ok=True)
     plot_elements(data, fit, out / "elements.png")
     plot_residuals(fit, out / "residuals.png")
-    metrics = {"source": str(source), "geometries": len(data), "time_convention": convention,
-               "fit": fit.summary(), "run_time_s": seconds, "notes": list(data.notes),
-               "versions": {"scatterlab": getattr(scatterlab, "__version__", "unknown"), "numpy": np.__version__,
-                            "scipy": scipy.__version__, "python": platform.python_version()}}
+    metrics = {
+        "source": str(source),
+        "geometries": len(data),
+        "time_convention": convention,
+        "fit": fit.summary(),
+        "run_time_s": seconds,
+        "notes": list(data.notes),
+        "versions": {
+            "scatterlab": getattr(scatterlab, "__version__", "unknown"),
+            "numpy": np.__version__,
+            "scipy": scipy.__version__,
+            "python": platform.python_version(),
+        },
+    }
     write_json(out / "metrics.json", metrics, overwrite=True)
     return write_text(report, _markdown(data, fit, source, convention, seconds), overwrite=True)

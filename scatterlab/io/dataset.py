@@ -1,30 +1,27 @@
 r"""Polarimetric image datasets: channel images of one scene at several specular geometries.
 
-:class:`PolarimetricDataset` is what ``scatterlab analyze`` and the characterization pipeline take from measured
-(or simulated) data:
+:class:`PolarimetricDataset` is what ``scatterlab analyze`` and the characterization pipeline take
+from measured (or simulated) data:
 
-============================  ===================  ===============================================================
-attribute                     shape / unit         meaning
-============================  ===================  ===============================================================
-``counts``                    (G, K, H, W) [e-]    channel images: G geometries, K polarizer channels,
-                                                   dark-subtracted photo-electrons (divide ADU by the gain first;
-                                                   small negative values from read noise are fine)
-``polarizer_angles``          (K,) [rad]           analyser angle of each channel from the s axis
-``theta``                     (G,) [rad]           specular geometry of each acquisition: theta_i = theta_r,
-                                                   phi = pi (observation in the specular plane)
-``wavelength``                float [m]
-``optics``                    :class:`Optics`      sampling of the PSF: pixels per lambda/D, or aperture
-                                                   diameter, pixel pitch and focal length
-``read_noise``                float or None [e-]   rms read noise, when known
-``truth``                     :class:`Truth`/None  what a simulation knows (labels, indices, roughness, the
-                                                   object's S0 and DOLP, the PSFs); None for measurements
-``title``, ``description``    str
-``simulated``                 bool                 True for simulated data (always said so in reports)
-============================  ===================  ===============================================================
+* ``counts`` (G, K, H, W) [e-]: channel images of G geometries and K polarizer channels, in
+  dark-subtracted photo-electrons (divide ADU by the gain first; small negative values from read
+  noise are fine);
+* ``polarizer_angles`` (K,) [rad]: analyser angle of each channel from the s axis;
+* ``theta`` (G,) [rad]: specular geometry of each acquisition, theta_i = theta_r and phi = pi
+  (observation in the specular plane);
+* ``wavelength`` [m];
+* ``optics`` (:class:`Optics`): sampling of the PSF, pixels per lambda/D, or the aperture diameter,
+  pixel pitch and focal length;
+* ``read_noise`` [e- rms] or None when unknown;
+* ``truth`` (:class:`Truth`) or None: what a simulation knows (labels, indices, roughness, the
+  object's S0 and DOLP, the PSFs); None for measurements;
+* ``title``, ``description`` (str) and ``simulated`` (bool, True for simulated data, always said so
+  in reports).
 
-The PSF sampling ``Q`` (pixels per lambda/D; 2 is Nyquist) fixes the support of the optical transfer function:
-the pupil's radius in the Fourier grid of an ``n``-pixel image is ``n / (2 Q)`` pixels
-(:meth:`Optics.pupil_radius`), the ``psf_radius`` of :func:`scatterlab.deconvolution.blind_deconvolve`.
+The PSF sampling ``Q`` (pixels per lambda/D; 2 is Nyquist) fixes the support of the optical transfer
+function: the pupil's radius in the Fourier grid of an ``n``-pixel image is ``n / (2 Q)`` pixels
+(:meth:`Optics.pupil_radius`), the ``psf_radius`` of
+:func:`scatterlab.deconvolution.blind_deconvolve`.
 
 Files (all hold the same keys; degrees and micrometres in files, radians and metres in memory):
 
@@ -32,14 +29,15 @@ Files (all hold the same keys; degrees and micrometres in files, radians and met
   :func:`read_dataset_npz`);
 * a multi-page TIFF with a sidecar TOML of the same name (:func:`write_dataset_tiff`,
   :func:`read_dataset_tiff`), the form most cameras give;
-* any of them may hold DoFP raw frames ``raw`` (G, 2H, 2W) with ``dofp_pattern_deg`` instead of ``counts`` and
-  ``polarizer_deg``: they are demosaiced on reading (:mod:`scatterlab.io.dofp`).
+* any of them may hold DoFP raw frames ``raw`` (G, 2H, 2W) with ``dofp_pattern_deg`` instead of
+  ``counts`` and ``polarizer_deg``: they are demosaiced on reading (:mod:`scatterlab.io.dofp`).
 
-:func:`read_dataset` picks the reader from the file name. Keys: ``counts`` or ``raw``; ``polarizer_deg`` (K,);
-``dofp_pattern_deg`` (2, 2); ``theta_deg`` (G,); ``wavelength_um``; ``pixels_per_lambda_over_d``,
-``aperture_diameter_mm``, ``pixel_pitch_um``, ``focal_length_mm`` (optics; give the first or the other three);
-``read_noise_e``; ``title``; ``description``; ``simulated``; ``truth_labels`` (H, W), ``truth_names`` (L,),
-``truth_n``, ``truth_kappa``, ``truth_sigma`` (L,), ``truth_s0``, ``truth_dolp``, ``truth_psf`` (G, H, W).
+:func:`read_dataset` picks the reader from the file name. Keys: ``counts`` or ``raw``;
+``polarizer_deg`` (K,); ``dofp_pattern_deg`` (2, 2); ``theta_deg`` (G,); ``wavelength_um``;
+``pixels_per_lambda_over_d``, ``aperture_diameter_mm``, ``pixel_pitch_um``, ``focal_length_mm``
+(optics; give the first or the other three); ``read_noise_e``; ``title``; ``description``;
+``simulated``; ``truth_labels`` (H, W), ``truth_names`` (L,), ``truth_n``, ``truth_kappa``,
+``truth_sigma`` (L,), ``truth_s0``, ``truth_dolp``, ``truth_psf`` (G, H, W).
 """
 
 from __future__ import annotations
@@ -51,20 +49,34 @@ import numpy as np
 
 from scatterlab.io.dofp import check_pattern, demosaic, mosaic
 
-__all__ = ["Optics", "Truth", "PolarimetricDataset", "to_flat", "from_flat", "read_dataset", "write_dataset",
-           "DATASET_SUFFIXES", "FORMAT_NAME"]
+__all__ = [
+    "Optics",
+    "Truth",
+    "PolarimetricDataset",
+    "to_flat",
+    "from_flat",
+    "read_dataset",
+    "write_dataset",
+    "DATASET_SUFFIXES",
+    "FORMAT_NAME",
+]
 
 FORMAT_NAME = "scatterlab polarimetric dataset"
 FORMAT_VERSION = 1
 DATASET_SUFFIXES = (".h5", ".hdf5", ".npz", ".tif", ".tiff", ".toml")
-_OPTICS_KEYS = {"pixels_per_lambda_over_d": 1.0, "aperture_diameter_mm": 1e-3, "pixel_pitch_um": 1e-6,
-                "focal_length_mm": 1e-3}
+_OPTICS_KEYS = {
+    "pixels_per_lambda_over_d": 1.0,
+    "aperture_diameter_mm": 1e-3,
+    "pixel_pitch_um": 1e-6,
+    "focal_length_mm": 1e-3,
+}
 
 
 @dataclass(frozen=True)
 class Optics:
-    """Imaging optics: give ``pixels_per_lambda_over_d`` or all of ``aperture_diameter``, ``pixel_pitch`` and
-    ``focal_length`` [m] (then ``Q = wavelength * focal_length / (aperture_diameter * pixel_pitch)``)."""
+    """Imaging optics: give ``pixels_per_lambda_over_d`` or all of ``aperture_diameter``,
+    ``pixel_pitch`` and ``focal_length`` [m] (then
+    ``Q = wavelength * focal_length / (aperture_diameter * pixel_pitch)``)."""
 
     pixels_per_lambda_over_d: float | None = None
     aperture_diameter: float | None = None
@@ -72,14 +84,21 @@ class Optics:
     focal_length: float | None = None
 
     def __post_init__(self):
-        for name in ("pixels_per_lambda_over_d", "aperture_diameter", "pixel_pitch", "focal_length"):
+        for name in (
+            "pixels_per_lambda_over_d",
+            "aperture_diameter",
+            "pixel_pitch",
+            "focal_length",
+        ):
             v = getattr(self, name)
             if v is not None and not (np.isfinite(v) and v > 0):
                 raise ValueError(f"optics {name} must be > 0, got {v}")
         physical = (self.aperture_diameter, self.pixel_pitch, self.focal_length)
         if self.pixels_per_lambda_over_d is None and any(v is None for v in physical):
-            raise ValueError("optics need pixels_per_lambda_over_d, or aperture_diameter, pixel_pitch and "
-                             "focal_length together")
+            raise ValueError(
+                "optics need pixels_per_lambda_over_d, or aperture_diameter, pixel_pitch and "
+                "focal_length together"
+            )
 
     def sampling(self, wavelength: float) -> float:
         """Pixels per lambda/D at ``wavelength`` [m] (2 is Nyquist sampling of the PSF)."""
@@ -88,7 +107,9 @@ class Optics:
         return float(wavelength * self.focal_length / (self.aperture_diameter * self.pixel_pitch))
 
     def pupil_radius(self, n: int, wavelength: float) -> float:
-        """Radius [pixels] of the pupil (half the OTF support) in the Fourier grid of an ``n``-pixel image."""
+        """Radius [pixels] of the pupil (half the OTF support) in the Fourier grid of an ``n``-pixel
+        image.
+        """
         return n / (2 * self.sampling(wavelength))
 
 
@@ -99,11 +120,15 @@ class Truth:
 
     Attributes
     ----------
-    labels : ndarray (H, W) int -- material label of each pixel, indexing ``names``, ``n``, ``kappa``, ``sigma``.
+    labels : ndarray (H, W) int
+        Material label of each pixel, indexing ``names``, ``n``, ``kappa``, ``sigma``.
     names : list of str
-    n, kappa, sigma : ndarray (L,) -- complex index ``n - 1j*kappa`` and rms facet slope per label.
-    s0, dolp : ndarray (G, H, W) or None -- the object's S0 [1/sr] and DOLP at each geometry.
-    psf : ndarray (G, H, W) or None -- the PSF each acquisition was blurred with (centred, unit sum).
+    n, kappa, sigma : ndarray (L,)
+        Complex index ``n - 1j*kappa`` and rms facet slope per label.
+    s0, dolp : ndarray (G, H, W) or None
+        The object's S0 [1/sr] and DOLP at each geometry.
+    psf : ndarray (G, H, W) or None
+        The PSF each acquisition was blurred with (centred, unit sum).
     """
 
     labels: np.ndarray
@@ -136,7 +161,11 @@ class PolarimetricDataset:
     def __post_init__(self):
         flat = to_flat(self)
         checked = from_flat(flat, self.source or "dataset")
-        self.counts, self.polarizer_angles, self.theta = checked.counts, checked.polarizer_angles, checked.theta
+        self.counts, self.polarizer_angles, self.theta = (
+            checked.counts,
+            checked.polarizer_angles,
+            checked.theta,
+        )
         self.wavelength = checked.wavelength
 
     @property
@@ -145,19 +174,26 @@ class PolarimetricDataset:
         return self.counts.shape
 
     def stokes(self) -> np.ndarray:
-        """Least-squares linear Stokes images of the (blurred, noisy) data, ``(G, 3, H, W)`` [e-]."""
+        """Least-squares linear Stokes images of the (blurred, noisy) data (G, 3, H, W) [e-]."""
         from scatterlab.imaging import stokes_from_channels
 
         return np.stack([stokes_from_channels(c, self.polarizer_angles) for c in self.counts])
 
 
-# ------------------------------------------------------------------------------------------- flat form
+# ------------------------------------------------------------------------------------------- flat
+# form
 def to_flat(ds: PolarimetricDataset, *, dofp_pattern=None) -> dict:
-    """The dataset as the flat dict of file keys (module docstring); ``dofp_pattern`` [deg] stores DoFP raw
-    frames (the four channels mosaicked) instead of channel images."""
-    flat = {"format": FORMAT_NAME, "format_version": FORMAT_VERSION, "title": ds.title,
-            "description": ds.description, "simulated": bool(ds.simulated),
-            "theta_deg": np.degrees(np.asarray(ds.theta, float)), "wavelength_um": float(ds.wavelength) * 1e6}
+    """The dataset as the flat dict of file keys (module docstring); ``dofp_pattern`` [deg] stores
+    DoFP raw frames (the four channels mosaicked) instead of channel images."""
+    flat = {
+        "format": FORMAT_NAME,
+        "format_version": FORMAT_VERSION,
+        "title": ds.title,
+        "description": ds.description,
+        "simulated": bool(ds.simulated),
+        "theta_deg": np.degrees(np.asarray(ds.theta, float)),
+        "wavelength_um": float(ds.wavelength) * 1e6,
+    }
     if dofp_pattern is not None:
         flat["raw"] = mosaic(ds.counts, ds.polarizer_angles, dofp_pattern)
         flat["dofp_pattern_deg"] = check_pattern(dofp_pattern, "dofp_pattern")
@@ -165,18 +201,25 @@ def to_flat(ds: PolarimetricDataset, *, dofp_pattern=None) -> dict:
         flat["counts"] = np.asarray(ds.counts, float)
         flat["polarizer_deg"] = np.degrees(np.asarray(ds.polarizer_angles, float))
     o = ds.optics
-    for key, value in (("pixels_per_lambda_over_d", o.pixels_per_lambda_over_d),
-                       ("aperture_diameter_mm", o.aperture_diameter), ("pixel_pitch_um", o.pixel_pitch),
-                       ("focal_length_mm", o.focal_length)):
+    for key, value in (
+        ("pixels_per_lambda_over_d", o.pixels_per_lambda_over_d),
+        ("aperture_diameter_mm", o.aperture_diameter),
+        ("pixel_pitch_um", o.pixel_pitch),
+        ("focal_length_mm", o.focal_length),
+    ):
         if value is not None:
             flat[key] = float(value) / _OPTICS_KEYS[key]
     if ds.read_noise is not None:
         flat["read_noise_e"] = float(ds.read_noise)
     t = ds.truth
     if t is not None:
-        flat.update(truth_labels=np.asarray(t.labels), truth_names=np.asarray(list(t.names), dtype=str),
-                    truth_n=np.asarray(t.n, float), truth_kappa=np.asarray(t.kappa, float),
-                    truth_sigma=np.asarray(t.sigma, float))
+        flat.update(
+            truth_labels=np.asarray(t.labels),
+            truth_names=np.asarray(list(t.names), dtype=str),
+            truth_n=np.asarray(t.n, float),
+            truth_kappa=np.asarray(t.kappa, float),
+            truth_sigma=np.asarray(t.sigma, float),
+        )
         for name in ("s0", "dolp", "psf"):
             if getattr(t, name) is not None:
                 flat[f"truth_{name}"] = np.asarray(getattr(t, name), float)
@@ -218,17 +261,30 @@ def _channels(flat, where):
     if "raw" in flat:
         raw = _array(flat, "raw", where, 3)
         if "dofp_pattern_deg" not in flat:
-            raise ValueError(f"{where}: DoFP raw frames need 'dofp_pattern_deg' (2x2 polarizer angles)")
-        counts, angles = demosaic(raw, check_pattern(flat["dofp_pattern_deg"], f"{where}: 'dofp_pattern_deg'"),
-                                  where=where)
-        return counts, angles, [f"DoFP raw frames {raw.shape[1:]} demosaiced by superpixel into 4 channels"]
+            raise ValueError(
+                f"{where}: DoFP raw frames need 'dofp_pattern_deg' (2x2 polarizer angles)"
+            )
+        counts, angles = demosaic(
+            raw,
+            check_pattern(flat["dofp_pattern_deg"], f"{where}: 'dofp_pattern_deg'"),
+            where=where,
+        )
+        return (
+            counts,
+            angles,
+            [f"DoFP raw frames {raw.shape[1:]} demosaiced by superpixel into 4 channels"],
+        )
     counts = _array(flat, "counts", where, 4)
     deg = _array(flat, "polarizer_deg", where, 1)
     if deg.size != counts.shape[1]:
-        raise ValueError(f"{where}: 'polarizer_deg' has {deg.size} angles for {counts.shape[1]} channels")
+        raise ValueError(
+            f"{where}: 'polarizer_deg' has {deg.size} angles for {counts.shape[1]} channels"
+        )
     if np.unique(np.round(np.mod(deg, 180), 9)).size < 3:
-        raise ValueError(f"{where}: 'polarizer_deg' {deg.tolist()} needs at least three different orientations "
-                         f"(mod 180 deg) to measure linear polarization")
+        raise ValueError(
+            f"{where}: 'polarizer_deg' {deg.tolist()} needs at least three different orientations "
+            f"(mod 180 deg) to measure linear polarization"
+        )
     return counts, np.radians(deg), []
 
 
@@ -241,22 +297,30 @@ def _truth(flat, counts_shape, where):
     props = [_array(flat, f"truth_{k}", where, 1) for k in ("n", "kappa", "sigma")]
     L = len(names)
     if labels.shape != (H, W) or not np.issubdtype(labels.dtype, np.integer):
-        raise ValueError(f"{where}: 'truth_labels' must be an integer map of shape {(H, W)}, got "
-                         f"{labels.dtype} {labels.shape}")
+        raise ValueError(
+            f"{where}: 'truth_labels' must be an integer map of shape {(H, W)}, got "
+            f"{labels.dtype} {labels.shape}"
+        )
     if any(p.size != L for p in props) or labels.min() < 0 or labels.max() >= L:
-        raise ValueError(f"{where}: truth_names, truth_n, truth_kappa, truth_sigma need one entry per label "
-                         f"(labels 0..{labels.max()})")
+        raise ValueError(
+            f"{where}: truth_names, truth_n, truth_kappa, truth_sigma need one entry per label "
+            f"(labels 0..{labels.max()})"
+        )
     maps = {}
     for k in ("s0", "dolp", "psf"):
         if f"truth_{k}" in flat:
             maps[k] = _array(flat, f"truth_{k}", where, 3)
             if maps[k].shape != (G, H, W):
-                raise ValueError(f"{where}: 'truth_{k}' must have shape {(G, H, W)}, got {maps[k].shape}")
+                raise ValueError(
+                    f"{where}: 'truth_{k}' must have shape {(G, H, W)}, got {maps[k].shape}"
+                )
     return Truth(labels.astype(int), names, *props, **maps)
 
 
 def from_flat(flat: dict, where: str) -> PolarimetricDataset:
-    """Validate the flat dict of file keys and build the dataset (``where`` names the file in errors)."""
+    """Validate the flat dict of file keys and build the dataset (``where`` names the file in
+    errors).
+    """
     counts, angles, notes = _channels(flat, where)
     G = counts.shape[0]
     theta_deg = _array(flat, "theta_deg", where, 1)
@@ -266,9 +330,14 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
         raise ValueError(f"{where}: 'theta_deg' must be in (0, 90) deg, got {theta_deg.tolist()}")
     wavelength = _scalar(flat, "wavelength_um", where) * 1e-6
     if not 0.01 <= wavelength * 1e6 <= 100:
-        raise ValueError(f"{where}: 'wavelength_um' = {wavelength * 1e6:g} is outside [0.01, 100] um")
-    kw = {k.replace("_mm", "").replace("_um", ""): None if v is None else v * _OPTICS_KEYS[k]
-          for k in _OPTICS_KEYS for v in [_scalar(flat, k, where, required=False)]}
+        raise ValueError(
+            f"{where}: 'wavelength_um' = {wavelength * 1e6:g} is outside [0.01, 100] um"
+        )
+    kw = {
+        k.replace("_mm", "").replace("_um", ""): None if v is None else v * _OPTICS_KEYS[k]
+        for k in _OPTICS_KEYS
+        for v in [_scalar(flat, k, where, required=False)]
+    }
     try:
         optics = Optics(**kw)
     except ValueError as exc:
@@ -277,11 +346,20 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
     if read_noise is not None and not (np.isfinite(float(read_noise)) and float(read_noise) >= 0):
         raise ValueError(f"{where}: 'read_noise_e' must be >= 0, got {read_noise}")
     ds = object.__new__(PolarimetricDataset)  # validated here: skip __post_init__'s round trip
-    ds.__dict__.update(counts=counts, polarizer_angles=angles, theta=np.radians(theta_deg), wavelength=wavelength,
-                       optics=optics, read_noise=None if read_noise is None else float(read_noise),
-                       truth=_truth(flat, counts.shape, where), title=str(flat.get("title", "")),
-                       description=str(flat.get("description", "")), simulated=_bool(flat.get("simulated", False)),
-                       source=str(where), notes=notes)
+    ds.__dict__.update(
+        counts=counts,
+        polarizer_angles=angles,
+        theta=np.radians(theta_deg),
+        wavelength=wavelength,
+        optics=optics,
+        read_noise=None if read_noise is None else float(read_noise),
+        truth=_truth(flat, counts.shape, where),
+        title=str(flat.get("title", "")),
+        description=str(flat.get("description", "")),
+        simulated=_bool(flat.get("simulated", False)),
+        source=str(where),
+        notes=notes,
+    )
     return ds
 
 
@@ -290,14 +368,16 @@ def _bool(v) -> bool:
     return v.lower() == "true" if isinstance(v, str) else bool(v)
 
 
-# ------------------------------------------------------------------------------------------- dispatch
+# -------------------------------------------------------------------------------------------
+# dispatch
 def read_dataset(path) -> PolarimetricDataset:
     """Read a dataset, choosing the reader from the file name.
 
     Parameters
     ----------
     path : str or Path
-        ``.h5``/``.hdf5``, ``.npz``, ``.tif``/``.tiff`` (with its sidecar ``.toml``) or the sidecar ``.toml``.
+        ``.h5``/``.hdf5``, ``.npz``, ``.tif``/``.tiff`` (with its sidecar ``.toml``) or the sidecar
+        ``.toml``.
 
     Returns
     -------
@@ -315,8 +395,10 @@ def read_dataset(path) -> PolarimetricDataset:
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in DATASET_SUFFIXES:
-        raise ValueError(f"{path}: expected a dataset (HDF5 .h5, NPZ .npz, or a TIFF stack with a sidecar "
-                         f".toml), got a {suffix or 'suffix-less'} file")
+        raise ValueError(
+            f"{path}: expected a dataset (HDF5 .h5, NPZ .npz, or a TIFF stack with a sidecar "
+            f".toml), got a {suffix or 'suffix-less'} file"
+        )
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such file")
     if suffix in (".h5", ".hdf5"):
@@ -326,14 +408,22 @@ def read_dataset(path) -> PolarimetricDataset:
     return stacks.read_dataset_tiff(path)
 
 
-def write_dataset(path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False) -> Path:
-    """Write ``ds`` in the format named by the file's suffix (``.h5``, ``.npz``, ``.tif``); returns the path."""
+def write_dataset(
+    path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
+) -> Path:
+    """Write ``ds`` in the format named by the file's suffix (``.h5``, ``.npz``, ``.tif``); returns
+    the path.
+    """
     from scatterlab.io import stacks
 
     suffix = Path(path).suffix.lower()
-    writers = {".h5": stacks.write_dataset_hdf5, ".hdf5": stacks.write_dataset_hdf5,
-               ".npz": stacks.write_dataset_npz, ".tif": stacks.write_dataset_tiff,
-               ".tiff": stacks.write_dataset_tiff}
+    writers = {
+        ".h5": stacks.write_dataset_hdf5,
+        ".hdf5": stacks.write_dataset_hdf5,
+        ".npz": stacks.write_dataset_npz,
+        ".tif": stacks.write_dataset_tiff,
+        ".tiff": stacks.write_dataset_tiff,
+    }
     if suffix not in writers:
         raise ValueError(f"{path}: dataset files end in {sorted(writers)}")
     return writers[suffix](path, ds, dofp_pattern=dofp_pattern, overwrite=overwrite)

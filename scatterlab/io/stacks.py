@@ -1,11 +1,14 @@
-"""Polarimetric image stacks on disk: HDF5, NPZ and TIFF with a sidecar TOML (keys: :mod:`scatterlab.io.dataset`).
+"""Polarimetric image stacks on disk: HDF5, NPZ, and TIFF with a sidecar TOML.
+
+The keys are those of :mod:`scatterlab.io.dataset`.
 
 * HDF5: arrays as datasets (gzip-compressed), scalars and strings as attributes of the root group;
 * NPZ: every key an array (strings as 0-d unicode arrays; read with ``allow_pickle=False``);
-* TIFF: the images as pages (``counts``: G*K pages, geometry-major -- geometry 0's channels first; ``raw``: one
-  page per geometry) and a sidecar ``NAME.toml`` holding every other key, ``layout = "channels"`` or
-  ``"dofp"``, and optionally ``tiff`` (the stack's file name, or a list of one file per geometry) and ``truth``
-  (an NPZ file with the ``truth_*`` arrays). A user's own stack needs only a sidecar such as::
+* TIFF: the images as pages (``counts``: G*K pages, geometry-major -- geometry 0's channels first;
+  ``raw``: one page per geometry) and a sidecar ``NAME.toml`` holding every other key, ``layout =
+  "channels"`` or ``"dofp"``, and optionally ``tiff`` (the stack's file name, or a list of one file
+  per geometry) and ``truth`` (an NPZ file with the ``truth_*`` arrays). A user's own stack needs
+  only a sidecar such as::
 
       wavelength_um = 1.55
       theta_deg = [40, 55]
@@ -23,20 +26,32 @@ import numpy as np
 
 from scatterlab.io.dataset import FORMAT_NAME, PolarimetricDataset, from_flat, to_flat
 
-__all__ = ["read_dataset_hdf5", "write_dataset_hdf5", "read_dataset_npz", "write_dataset_npz",
-           "read_dataset_tiff", "write_dataset_tiff"]
+__all__ = [
+    "read_dataset_hdf5",
+    "write_dataset_hdf5",
+    "read_dataset_npz",
+    "write_dataset_npz",
+    "read_dataset_tiff",
+    "write_dataset_tiff",
+]
 
 _IMAGES = ("counts", "raw")
 
 
 def _store(v):
-    """float32 for images (counts carry ~1e-7 relative rounding, far below shot noise), as-is otherwise."""
+    """float32 for images (counts carry ~1e-7 relative rounding, far below shot noise), as-is
+    otherwise.
+    """
     a = np.asarray(v)
     return a.astype(np.float32) if a.dtype.kind == "f" and a.ndim >= 2 else a
 
 
-def write_dataset_hdf5(path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False) -> Path:
-    """Write ``ds`` to HDF5 (atomically; ``dofp_pattern`` [deg] stores DoFP raw frames). Returns the path."""
+def write_dataset_hdf5(
+    path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
+) -> Path:
+    """Write ``ds`` to HDF5 (atomically; ``dofp_pattern`` [deg] stores DoFP raw frames). Returns the
+    path.
+    """
     import h5py
 
     from scatterlab.runtime.results import atomic_write_bytes
@@ -55,7 +70,9 @@ def write_dataset_hdf5(path, ds: PolarimetricDataset, *, dofp_pattern=None, over
 
 
 def read_dataset_hdf5(path) -> PolarimetricDataset:
-    """Read a dataset from HDF5 (ValueError naming the file and key for anything missing or invalid)."""
+    """Read a dataset from HDF5 (ValueError naming the file and key for anything missing or
+    invalid).
+    """
     import h5py
 
     try:
@@ -67,12 +84,17 @@ def read_dataset_hdf5(path) -> PolarimetricDataset:
         for key, item in f5.items():
             if isinstance(item, h5py.Dataset):
                 data = item[()]
-                flat[key] = np.array([x.decode() if isinstance(x, bytes) else x for x in data]) \
-                    if item.dtype.kind == "O" else np.asarray(data)
+                flat[key] = (
+                    np.array([x.decode() if isinstance(x, bytes) else x for x in data])
+                    if item.dtype.kind == "O"
+                    else np.asarray(data)
+                )
     return from_flat(flat, str(path))
 
 
-def write_dataset_npz(path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False) -> Path:
+def write_dataset_npz(
+    path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
+) -> Path:
     """Write ``ds`` to a compressed NPZ (atomically). Returns the path."""
     from scatterlab.runtime.results import write_npz
 
@@ -91,7 +113,8 @@ def read_dataset_npz(path) -> PolarimetricDataset:
     return from_flat(flat, str(path))
 
 
-# ------------------------------------------------------------------------------------------------ TIFF
+# ------------------------------------------------------------------------------------------------
+# TIFF
 def _toml_value(v) -> str:
     if isinstance(v, (bool, np.bool_)):
         return "true" if v else "false"
@@ -103,11 +126,17 @@ def _toml_value(v) -> str:
     return repr(float(a)) if a.dtype.kind == "f" else str(a.item())
 
 
-def write_dataset_tiff(path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False,
-                       truth_file: str | None = None) -> Path:
-    """Write the images as a multi-page float32 TIFF and the rest as the sidecar ``path.with_suffix('.toml')``;
-    the truth (if any) goes to ``truth_file`` (default ``NAME-truth.npz``), named in the sidecar. Returns the
-    TIFF's path."""
+def write_dataset_tiff(
+    path,
+    ds: PolarimetricDataset,
+    *,
+    dofp_pattern=None,
+    overwrite: bool = False,
+    truth_file: str | None = None,
+) -> Path:
+    """Write the images as a multi-page float32 TIFF and the rest as the sidecar
+    ``path.with_suffix('.toml')``; the truth (if any) goes to ``truth_file`` (default
+    ``NAME-truth.npz``), named in the sidecar. Returns the TIFF's path."""
     import tifffile
 
     from scatterlab.runtime.results import atomic_write_bytes, write_npz, write_text
@@ -118,12 +147,21 @@ def write_dataset_tiff(path, ds: PolarimetricDataset, *, dofp_pattern=None, over
     pages = np.asarray(flat.pop(key), np.float32)
     pages = pages.reshape((-1,) + pages.shape[-2:])
     truth = {k: flat.pop(k) for k in list(flat) if k.startswith("truth_")}
-    lines = [f"# {FORMAT_NAME}: sidecar of {path.name} (pages: "
-             + ("one DoFP raw frame per geometry)" if key == "raw" else "G*K channel images, geometry-major)"),
-             f'tiff = "{path.name}"', f'layout = "{"dofp" if key == "raw" else "channels"}"']
+    lines = [
+        f"# {FORMAT_NAME}: sidecar of {path.name} (pages: "
+        + (
+            "one DoFP raw frame per geometry)"
+            if key == "raw"
+            else "G*K channel images, geometry-major)"
+        ),
+        f'tiff = "{path.name}"',
+        f'layout = "{"dofp" if key == "raw" else "channels"}"',
+    ]
     if truth:
         name = truth_file or f"{path.stem}-truth.npz"
-        write_npz(path.parent / name, overwrite=overwrite, **{k: _store(v) for k, v in truth.items()})
+        write_npz(
+            path.parent / name, overwrite=overwrite, **{k: _store(v) for k, v in truth.items()}
+        )
         lines.append(f'truth = "{name}"')
     lines += [f"{k} = {_toml_value(v)}" for k, v in flat.items()]
     buf = io.BytesIO()
@@ -138,8 +176,10 @@ def _sidecar(path: Path) -> Path:
         return path
     side = path.with_suffix(".toml")
     if not side.exists():
-        raise ValueError(f"{path}: a TIFF stack needs its sidecar {side.name} (wavelength_um, theta_deg, "
-                         f"polarizer_deg, pixels_per_lambda_over_d, layout; see scatterlab.io.stacks)")
+        raise ValueError(
+            f"{path}: a TIFF stack needs its sidecar {side.name} (wavelength_um, theta_deg, "
+            f"polarizer_deg, pixels_per_lambda_over_d, layout; see scatterlab.io.stacks)"
+        )
     return side
 
 
@@ -147,8 +187,11 @@ def _load_pages(side: Path, meta: dict, default: Path) -> np.ndarray:
     import tifffile
 
     names = meta.pop("tiff", None)
-    files = [default] if names is None else [side.parent / n for n in ([names] if isinstance(names, str)
-                                                                       else names)]
+    files = (
+        [default]
+        if names is None
+        else [side.parent / n for n in ([names] if isinstance(names, str) else names)]
+    )
     stacks = []
     for f in files:
         if not f.exists():
@@ -165,7 +208,9 @@ def _load_pages(side: Path, meta: dict, default: Path) -> np.ndarray:
 
 
 def read_dataset_tiff(path) -> PolarimetricDataset:
-    """Read a TIFF stack and its sidecar TOML (``path`` may be either); ValueError naming the file and key."""
+    """Read a TIFF stack and its sidecar TOML (``path`` may be either); ValueError naming the file
+    and key.
+    """
     import tomllib
 
     path = Path(path)
@@ -177,8 +222,14 @@ def read_dataset_tiff(path) -> PolarimetricDataset:
     layout = meta.pop("layout", "channels")
     if layout not in ("channels", "dofp"):
         raise ValueError(f"{side}: layout must be 'channels' or 'dofp', got {layout!r}")
-    default = path if path.suffix.lower() != ".toml" else next(
-        (p for p in (side.with_suffix(".tif"), side.with_suffix(".tiff")) if p.exists()), side.with_suffix(".tif"))
+    default = (
+        path
+        if path.suffix.lower() != ".toml"
+        else next(
+            (p for p in (side.with_suffix(".tif"), side.with_suffix(".tiff")) if p.exists()),
+            side.with_suffix(".tif"),
+        )
+    )
     pages = _load_pages(side, meta, default)
     truth = meta.pop("truth", None)
     if truth is not None:
@@ -186,7 +237,9 @@ def read_dataset_tiff(path) -> PolarimetricDataset:
             with np.load(side.parent / truth, allow_pickle=False) as z:
                 meta.update({k: z[k] for k in z.files})
         except (OSError, ValueError) as exc:
-            raise ValueError(f"{side}: truth file {truth!r} is not a readable NPZ ({exc})") from None
+            raise ValueError(
+                f"{side}: truth file {truth!r} is not a readable NPZ ({exc})"
+            ) from None
     G = len(np.atleast_1d(meta.get("theta_deg", [])))
     if layout == "dofp":
         if pages.shape[0] != G:
@@ -195,7 +248,10 @@ def read_dataset_tiff(path) -> PolarimetricDataset:
     else:
         K = len(np.atleast_1d(meta.get("polarizer_deg", [])))
         if G == 0 or K == 0 or pages.shape[0] != G * K:
-            raise ValueError(f"{side}: {pages.shape[0]} TIFF pages for {G} geometries (theta_deg) x {K} channels "
-                             f"(polarizer_deg): need G*K pages, geometry-major")
+            raise ValueError(
+                f"{side}: {pages.shape[0]} TIFF pages for {G} geometries (theta_deg) x {K} "
+                "channels "
+                f"(polarizer_deg): need G*K pages, geometry-major"
+            )
         meta["counts"] = pages.reshape((G, K) + pages.shape[1:])
     return from_flat(meta, str(side))

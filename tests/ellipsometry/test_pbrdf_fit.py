@@ -1,5 +1,6 @@
-"""fit_pbrdf: parameters recovered from Mueller BRDFs made by the model with noise, and from a NIST SCATMECH
-(pySCATMECH) file read through scatterlab.io (an independent forward model and file path)."""
+"""fit_pbrdf: parameters recovered from Mueller BRDFs made by the model with noise, and from a NIST
+SCATMECH (pySCATMECH) file read through scatterlab.io (an independent forward model and file path).
+"""
 
 import sys
 from pathlib import Path
@@ -12,7 +13,7 @@ from scatterlab.io import MuellerBRDF, read_mueller_brdf, write_mueller_brdf
 from scatterlab.pbrdf import Model
 from scatterlab.polarization import depolarizer, linear_retarder
 
-ETA, SIGMA = 1.39 - 0.34j, 0.3   # green paint at 1550 nm (a depolarizing, dielectric-like sample)
+ETA, SIGMA = 1.39 - 0.34j, 0.3  # green paint at 1550 nm (a depolarizing, dielectric-like sample)
 
 
 def geometries(rng, n=30):
@@ -32,8 +33,9 @@ def noisy(rng, rel=0.01, eta=ETA, sigma=SIGMA, wavelengths=(1.55e-6,)):
 
 
 def test_recovers_parameters_with_calibrated_errors():
-    """1 % noise of F00 on all 16 elements at 30 out-of-plane geometries: the truth lies within 4 standard errors
-    (seed fixed) and the reduced chi^2 is 1 within its sampling spread (sqrt(2/477) ~ 0.065, 4 sigma)."""
+    """1 % noise of F00 on all 16 elements at 30 out-of-plane geometries: the truth lies within 4
+    standard errors (seed fixed) and the reduced chi^2 is 1 within its sampling spread (sqrt(2/477)
+    ~ 0.065, 4 sigma)."""
     fit = fit_pbrdf(noisy(np.random.default_rng(7)))
     truth = np.array([ETA.real, -ETA.imag, SIGMA])
     got = np.array([fit.n, fit.kappa, fit.sigma])
@@ -55,8 +57,9 @@ def test_normalised_data_and_wavelength_selection():
     with pytest.raises(ValueError, match="not in the data"):
         fit_pbrdf(data, wavelength=0.6e-6)
     sel = data.select(1.55e-6)
-    norm = MuellerBRDF(sel.wavelength, sel.theta_i, sel.theta_r, sel.phi, sel.normalised_mueller(),
-                       normalised=True)
+    norm = MuellerBRDF(
+        sel.wavelength, sel.theta_i, sel.theta_r, sel.phi, sel.normalised_mueller(), normalised=True
+    )
     fit = fit_pbrdf(norm, wavelength=1.55e-6)
     assert fit.normalised and np.all(np.isnan(fit.residuals[:, 0, 0]))
     assert [fit.n, fit.kappa, fit.sigma] == pytest.approx([ETA.real, -ETA.imag, SIGMA], abs=1e-5)
@@ -64,20 +67,25 @@ def test_normalised_data_and_wavelength_selection():
 
 @pytest.mark.peer
 def test_scatmech_file_fitted_through_the_reader(tmp_path):
-    """A SCATMECH Shadowed_Facet_BRDF_Model file (exp(-iwt), signed angles, out of plane) is fitted by the
-    specular pBRDF (diffuse='none', the same physics): the parameters agree to the 6 digits SCATMECH uses."""
+    """A SCATMECH Shadowed_Facet_BRDF_Model file (exp(-iwt), signed angles, out of plane) is fitted
+    by the specular pBRDF (diffuse='none', the same physics): the parameters agree to the 6 digits
+    SCATMECH uses."""
     sys.path.insert(0, str(Path(__file__).parents[1] / "io"))
-    from test_mueller_brdf import ETA as E, SIGMA as S, scatmech_file, signed_rows
+    from test_mueller_brdf import ETA as E
+    from test_mueller_brdf import SIGMA as S
+    from test_mueller_brdf import scatmech_file, signed_rows
 
-    data = read_mueller_brdf(scatmech_file(tmp_path / "s.csv", signed_rows()), time_convention="exp(-iwt)")
+    data = read_mueller_brdf(
+        scatmech_file(tmp_path / "s.csv", signed_rows()), time_convention="exp(-iwt)"
+    )
     fit = fit_pbrdf(data, diffuse="none", starts=((1.5, 5.0),))
     assert [fit.n, fit.kappa, fit.sigma] == pytest.approx([E.real, -E.imag, S], rel=1e-5)
     assert fit.circular_flip_ratio > 10
 
 
 def test_depolarization_index_limits_and_partial_explanation():
-    assert depolarization_index(linear_retarder(0.7, 0.3)) == pytest.approx(1.0)   # Jones matrix
-    assert depolarization_index(depolarizer(0.0)) == pytest.approx(0.0)             # ideal depolarizer
+    assert depolarization_index(linear_retarder(0.7, 0.3)) == pytest.approx(1.0)  # Jones matrix
+    assert depolarization_index(depolarizer(0.0)) == pytest.approx(0.0)  # ideal depolarizer
     # a sample depolarizing more than the model's diffuse term: Model + extra unpolarized light
     rng = np.random.default_rng(9)
     ti, tr, phi = geometries(rng, 25)
@@ -92,8 +100,8 @@ def test_depolarization_index_limits_and_partial_explanation():
 @pytest.mark.slow
 def test_posterior_agrees_with_the_covariance():
     """emcee (24 walkers x 600 steps, half burn-in) around the fit: posterior sd within 30 % of the
-    linearised standard errors (the chain's sd is estimated to ~10 % at this length) and medians within
-    one standard error of the fit."""
+    linearised standard errors (the chain's sd is estimated to ~10 % at this length) and medians
+    within one standard error of the fit."""
     fit = fit_pbrdf(noisy(np.random.default_rng(7)), posterior_steps=600, rng=3)
     s = fit.posterior["samples"]
     np.testing.assert_allclose(s.std(0), fit.errors, rtol=0.3)
@@ -110,14 +118,20 @@ def test_bad_arguments(tmp_path):
         fit_pbrdf(data, bounds=((1, 0.5), (0, 30), (0.01, 1.5)))
     with pytest.raises(ValueError, match="posterior_steps"):
         fit_pbrdf(data, posterior_steps=-5)
-    zero = MuellerBRDF(data.wavelength, data.theta_i, data.theta_r, data.phi, data.mueller, 0 * data.std)
+    zero = MuellerBRDF(
+        data.wavelength, data.theta_i, data.theta_r, data.phi, data.mueller, 0 * data.std
+    )
     with pytest.raises(ValueError, match="std"):
         fit_pbrdf(zero)
-    # normalised elements in the specular direction without a diffuse term do not depend on sigma at all
+    # normalised elements in the specular direction without a diffuse term do not depend on sigma at
+    # all
     th = np.radians([30.0, 50.0])
     M = Model(SIGMA, diffuse="none").mueller(ETA, th, th, np.pi)
     with pytest.warns(RuntimeWarning, match="do not determine"):
-        fit = fit_pbrdf(MuellerBRDF(1.55e-6, th, th, np.pi, M / M[:, :1, :1], normalised=True), diffuse="none",
-                        starts=((1.5, 0.3),))
+        fit = fit_pbrdf(
+            MuellerBRDF(1.55e-6, th, th, np.pi, M / M[:, :1, :1], normalised=True),
+            diffuse="none",
+            starts=((1.5, 0.3),),
+        )
     assert not fit.determined and np.all(np.isinf(fit.errors))
     write_mueller_brdf(tmp_path / "d.csv", data)  # the writer accepts what the fit takes

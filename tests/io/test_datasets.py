@@ -2,28 +2,56 @@ import numpy as np
 import pytest
 
 from scatterlab.imaging import ANGLES_0_45_90_135, channel_images, stokes_from_channels
-from scatterlab.io import (Optics, PolarimetricDataset, Truth, demosaic, mosaic, read_dataset, write_dataset,
-                           write_dataset_tiff)
+from scatterlab.io import (
+    Optics,
+    PolarimetricDataset,
+    Truth,
+    demosaic,
+    mosaic,
+    read_dataset,
+    write_dataset,
+    write_dataset_tiff,
+)
 
 
 def small(rng=0, truth=True, G=2, H=6, W=8):
     rng = np.random.default_rng(rng)
-    S = np.stack([np.full((H, W), 100.0), rng.uniform(-30, 30, (H, W)), rng.uniform(-30, 30, (H, W))])
+    S = np.stack(
+        [np.full((H, W), 100.0), rng.uniform(-30, 30, (H, W)), rng.uniform(-30, 30, (H, W))]
+    )
     counts = np.stack([channel_images(S * (g + 1), ANGLES_0_45_90_135) for g in range(G)])
     t = None
     if truth:
         labels = rng.integers(0, 2, (H, W))
-        t = Truth(labels, ["paint", "metal"], np.array([1.39, 1.44]), np.array([0.34, 16.0]),
-                  np.array([0.3, 0.3]), s0=rng.uniform(1, 2, (G, H, W)), dolp=rng.uniform(0, 1, (G, H, W)),
-                  psf=rng.uniform(0, 1, (G, H, W)))
-    return PolarimetricDataset(counts, ANGLES_0_45_90_135, np.radians([40.0, 55.0][:G]), 1.55e-6,
-                               Optics(pixels_per_lambda_over_d=2.0), read_noise=10.0, truth=t, title="test",
-                               description="simulated", simulated=True)
+        t = Truth(
+            labels,
+            ["paint", "metal"],
+            np.array([1.39, 1.44]),
+            np.array([0.34, 16.0]),
+            np.array([0.3, 0.3]),
+            s0=rng.uniform(1, 2, (G, H, W)),
+            dolp=rng.uniform(0, 1, (G, H, W)),
+            psf=rng.uniform(0, 1, (G, H, W)),
+        )
+    return PolarimetricDataset(
+        counts,
+        ANGLES_0_45_90_135,
+        np.radians([40.0, 55.0][:G]),
+        1.55e-6,
+        Optics(pixels_per_lambda_over_d=2.0),
+        read_noise=10.0,
+        truth=t,
+        title="test",
+        description="simulated",
+        simulated=True,
+    )
 
 
 def assert_same(a, b):
     np.testing.assert_allclose(a.counts, b.counts, rtol=1e-6)  # images are stored as float32
-    np.testing.assert_allclose(np.mod(a.polarizer_angles, np.pi), np.mod(b.polarizer_angles, np.pi), atol=1e-12)
+    np.testing.assert_allclose(
+        np.mod(a.polarizer_angles, np.pi), np.mod(b.polarizer_angles, np.pi), atol=1e-12
+    )
     np.testing.assert_allclose(a.theta, b.theta, rtol=1e-14)
     assert a.wavelength == pytest.approx(b.wavelength, rel=1e-14)
     assert a.optics == b.optics and a.read_noise == b.read_noise and a.simulated == b.simulated
@@ -67,8 +95,14 @@ def test_dofp_demosaic_layout_and_stokes():
     np.testing.assert_array_equal(mosaic(ch, ang, pattern), raw)
 
 
-@pytest.mark.parametrize("pattern, message", [
-    ([[0, 45], [90, 180]], "four different"), ([0, 45, 90, 135], "2x2"), ([[0, 45], [90, np.nan]], "finite")])
+@pytest.mark.parametrize(
+    "pattern, message",
+    [
+        ([[0, 45], [90, 180]], "four different"),
+        ([0, 45, 90, 135], "2x2"),
+        ([[0, 45], [90, np.nan]], "finite"),
+    ],
+)
 def test_bad_dofp_layouts(pattern, message):
     with pytest.raises(ValueError, match=message):
         demosaic(np.zeros((4, 4)), pattern)
@@ -100,21 +134,24 @@ def edit_npz(tmp_path, **changes):
     return bad
 
 
-@pytest.mark.parametrize("changes, message", [
-    ({"counts": None}, "missing 'counts'"),
-    ({"theta_deg": np.array([40.0])}, "1 angles for 2 geometries"),
-    ({"theta_deg": np.array([40.0, 95.0])}, r"theta_deg' must be in \(0, 90\)"),
-    ({"polarizer_deg": np.array([0.0, 45, 90])}, "3 angles for 4 channels"),
-    ({"polarizer_deg": np.array([0.0, 180, 0, 180])}, "three different orientations"),
-    ({"counts": np.zeros((2, 4, 6))}, "'counts' must have 4 dimensions"),
-    ({"counts": np.full((2, 4, 6, 8), np.nan)}, "'counts' contains NaN"),
-    ({"wavelength_um": np.array(-1.0)}, "'wavelength_um' must be > 0"),
-    ({"wavelength_um": np.array(1550.0)}, "outside"),
-    ({"pixels_per_lambda_over_d": None}, "optics need"),
-    ({"truth_dolp": np.zeros((2, 3, 3))}, "'truth_dolp' must have shape"),
-    ({"truth_n": np.array([1.0])}, "one entry per label"),
-    ({"raw": np.zeros((2, 12, 16))}, "both 'counts' and 'raw'"),
-])
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"counts": None}, "missing 'counts'"),
+        ({"theta_deg": np.array([40.0])}, "1 angles for 2 geometries"),
+        ({"theta_deg": np.array([40.0, 95.0])}, r"theta_deg' must be in \(0, 90\)"),
+        ({"polarizer_deg": np.array([0.0, 45, 90])}, "3 angles for 4 channels"),
+        ({"polarizer_deg": np.array([0.0, 180, 0, 180])}, "three different orientations"),
+        ({"counts": np.zeros((2, 4, 6))}, "'counts' must have 4 dimensions"),
+        ({"counts": np.full((2, 4, 6, 8), np.nan)}, "'counts' contains NaN"),
+        ({"wavelength_um": np.array(-1.0)}, "'wavelength_um' must be > 0"),
+        ({"wavelength_um": np.array(1550.0)}, "outside"),
+        ({"pixels_per_lambda_over_d": None}, "optics need"),
+        ({"truth_dolp": np.zeros((2, 3, 3))}, "'truth_dolp' must have shape"),
+        ({"truth_n": np.array([1.0])}, "one entry per label"),
+        ({"raw": np.zeros((2, 12, 16))}, "both 'counts' and 'raw'"),
+    ],
+)
 def test_bad_dataset_files_name_the_problem(tmp_path, changes, message):
     with pytest.raises(ValueError, match=message) as err:
         read_dataset(edit_npz(tmp_path, **changes))
@@ -143,10 +180,13 @@ def test_users_tiff_stack_with_one_file_per_geometry_and_a_minimal_sidecar(tmp_p
 
     ds = small(truth=False)
     for g in range(2):
-        tifffile.imwrite(tmp_path / f"geom{g}.tif", ds.counts[g].astype(np.float32), photometric="minisblack")
+        tifffile.imwrite(
+            tmp_path / f"geom{g}.tif", ds.counts[g].astype(np.float32), photometric="minisblack"
+        )
     (tmp_path / "plate.toml").write_text(
         'tiff = ["geom0.tif", "geom1.tif"]\nwavelength_um = 1.55\ntheta_deg = [40, 55]\n'
-        'polarizer_deg = [0, 45, 90, 135]\npixels_per_lambda_over_d = 2.0\n')
+        "polarizer_deg = [0, 45, 90, 135]\npixels_per_lambda_over_d = 2.0\n"
+    )
     back = read_dataset(tmp_path / "plate.toml")
     np.testing.assert_allclose(back.counts, ds.counts, rtol=1e-6)
     assert back.truth is None and not back.simulated and back.read_noise is None

@@ -1,4 +1,6 @@
-"""The example files in data/examples: the generator reproduces them, and each reads back to what it claims."""
+"""The example files in data/examples: the generator reproduces them, and each reads back to what it
+claims.
+"""
 
 from pathlib import Path
 
@@ -9,7 +11,9 @@ from scatterlab.io import read_dataset, read_ellipsometry, read_mueller_brdf
 from scatterlab.io.examples import write_examples
 
 EXAMPLES = Path(__file__).parents[2] / "data" / "examples"
-pytestmark = pytest.mark.skipif(not EXAMPLES.is_dir(), reason="data/examples is not in this checkout")
+pytestmark = pytest.mark.skipif(
+    not EXAMPLES.is_dir(), reason="data/examples is not in this checkout"
+)
 
 
 def test_generator_reproduces_the_committed_examples_and_every_file_is_listed(tmp_path):
@@ -36,8 +40,15 @@ def test_examples_read_as_described():
     assert two.wavelengths == pytest.approx([1.064e-6, 1.55e-6]) and two.std is not None
     e = read_ellipsometry(EXAMPLES / "ellipsometry_in_plane.csv")
     assert e.wavelength == pytest.approx(1.064e-6) and e.std.shape == e.elements.shape
-    sets = {name: read_dataset(EXAMPLES / name) for name in
-            ("painted_plate.h5", "painted_plate.npz", "painted_plate.tif", "painted_plate_dofp.toml")}
+    sets = {
+        name: read_dataset(EXAMPLES / name)
+        for name in (
+            "painted_plate.h5",
+            "painted_plate.npz",
+            "painted_plate.tif",
+            "painted_plate_dofp.toml",
+        )
+    }
     for name, ds in sets.items():
         assert ds.shape == (2, 4, 48, 48) and ds.simulated and "simulated" in ds.description, name
         np.testing.assert_array_equal(ds.counts, sets["painted_plate.h5"].counts)
