@@ -53,8 +53,19 @@ _CIRCULAR[3, :3] = _CIRCULAR[:3, 3] = True
 
 
 def depolarization_index(M) -> np.ndarray:
-    """Depolarization index ``P_Delta`` of Mueller matrices ``(..., 4, 4)`` -> ``(...)`` in [0, 1]
-    for physical matrices (NaN where ``M00 <= 0``; not clipped, so noise can push it past 1)."""
+    """Depolarization index ``P_Delta`` (Gil and Bernabeu 1985; module docstring).
+
+    Parameters
+    ----------
+    M : array_like (..., 4, 4)
+        Mueller matrices (any scale).
+
+    Returns
+    -------
+    ndarray (...)
+        1 for non-depolarizing, 0 for an ideal depolarizer; in [0, 1] for physical matrices, NaN
+        where ``M00 <= 0``, not clipped (noise can push it past 1).
+    """
     M = np.asarray(M, float)
     m00 = M[..., 0, 0]
     total = np.sum(M * M, axis=(-2, -1)) - m00**2
@@ -120,7 +131,14 @@ class PBRDFFit(IndexFitMixin):
     posterior: dict | None = None
 
     def summary(self) -> dict:
-        """Plain numbers for JSON: parameters, errors, fit quality, depolarization."""
+        """Plain numbers for JSON.
+
+        Returns
+        -------
+        dict
+            Parameters, their errors and covariance, fit quality, per-element RMS residuals,
+            depolarization, the time-convention check, the options and the posterior summary.
+        """
         out = {
             "n": self.n,
             "kappa": self.kappa,

@@ -101,14 +101,33 @@ class Optics:
             )
 
     def sampling(self, wavelength: float) -> float:
-        """Pixels per lambda/D at ``wavelength`` [m] (2 is Nyquist sampling of the PSF)."""
+        """Pixels per lambda/D (2 is Nyquist sampling of the PSF).
+
+        Parameters
+        ----------
+        wavelength : float [m]
+
+        Returns
+        -------
+        float
+        """
         if self.pixels_per_lambda_over_d is not None:
             return float(self.pixels_per_lambda_over_d)
         return float(wavelength * self.focal_length / (self.aperture_diameter * self.pixel_pitch))
 
     def pupil_radius(self, n: int, wavelength: float) -> float:
-        """Radius [pixels] of the pupil (half the OTF support) in the Fourier grid of an ``n``-pixel
-        image.
+        """Radius of the pupil (half the OTF support) in the Fourier grid of an image.
+
+        Parameters
+        ----------
+        n : int
+            Image size [pixels].
+        wavelength : float [m]
+
+        Returns
+        -------
+        float
+            ``n / (2 Q)`` [pixels], the ``psf_radius`` of the blind deconvolution.
         """
         return n / (2 * self.sampling(wavelength))
 
@@ -183,8 +202,19 @@ class PolarimetricDataset:
 # ------------------------------------------------------------------------------------------- flat
 # form
 def to_flat(ds: PolarimetricDataset, *, dofp_pattern=None) -> dict:
-    """The dataset as the flat dict of file keys (module docstring); ``dofp_pattern`` [deg] stores
-    DoFP raw frames (the four channels mosaicked) instead of channel images."""
+    """The dataset as the flat dict of file keys (module docstring).
+
+    Parameters
+    ----------
+    ds : PolarimetricDataset
+    dofp_pattern : array_like (2, 2) [deg], optional
+        Store DoFP raw frames (the four channels mosaicked) instead of channel images.
+
+    Returns
+    -------
+    dict
+        Arrays, numbers and strings keyed as in files (degrees, micrometres).
+    """
     flat = {
         "format": FORMAT_NAME,
         "format_version": FORMAT_VERSION,
@@ -318,8 +348,24 @@ def _truth(flat, counts_shape, where):
 
 
 def from_flat(flat: dict, where: str) -> PolarimetricDataset:
-    """Validate the flat dict of file keys and build the dataset (``where`` names the file in
-    errors).
+    """Validate the flat dict of file keys and build the dataset.
+
+    Parameters
+    ----------
+    flat : dict
+        Keys of the module docstring (``counts`` or ``raw``, ``theta_deg``, ...).
+    where : str
+        The file, named in every error.
+
+    Returns
+    -------
+    PolarimetricDataset
+
+    Raises
+    ------
+    ValueError
+        A missing key, a wrong shape, NaN, angles or wavelength out of range, too few polarizer
+        orientations, bad optics or truth, naming ``where`` and the key.
     """
     counts, angles, notes = _channels(flat, where)
     G = counts.shape[0]
@@ -411,8 +457,20 @@ def read_dataset(path) -> PolarimetricDataset:
 def write_dataset(
     path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
 ) -> Path:
-    """Write ``ds`` in the format named by the file's suffix (``.h5``, ``.npz``, ``.tif``); returns
-    the path.
+    """Write ``ds`` in the format named by the file's suffix.
+
+    Parameters
+    ----------
+    path : str or Path
+        Ending in ``.h5``/``.hdf5``, ``.npz`` or ``.tif``/``.tiff``.
+    ds : PolarimetricDataset
+    dofp_pattern : array_like (2, 2) [deg], optional
+        Store DoFP raw frames instead of channel images.
+    overwrite : bool
+
+    Returns
+    -------
+    Path
     """
     from scatterlab.io import stacks
 

@@ -180,7 +180,20 @@ def _ellipsometry(rng):
 
 
 def write_examples(out="data/examples", *, overwrite: bool = False) -> list[Path]:
-    """Write every example file into ``out`` (module docstring); returns the paths written."""
+    """Write every example file (module docstring).
+
+    Parameters
+    ----------
+    out : str or Path
+        Output folder.
+    overwrite : bool
+        Replace existing files (otherwise FileExistsError).
+
+    Returns
+    -------
+    list of Path
+        The files written (the sidecars and truth files beside the TIFFs are not listed).
+    """
     from scatterlab.io.dofp import SONY_POLARSENS
     from scatterlab.io.ellipsometry import write_ellipsometry
     from scatterlab.io.mueller_brdf import write_mueller_brdf

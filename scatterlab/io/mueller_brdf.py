@@ -141,8 +141,22 @@ class MuellerBRDF:
         return np.unique(self.wavelength)
 
     def select(self, wavelength, rtol: float = 1e-6) -> "MuellerBRDF":
-        """The rows at ``wavelength`` [m] (within ``rtol``); ValueError listing the file's
-        wavelengths if none.
+        """The rows at one wavelength.
+
+        Parameters
+        ----------
+        wavelength : float [m]
+        rtol : float
+            Relative tolerance of the match.
+
+        Returns
+        -------
+        MuellerBRDF
+
+        Raises
+        ------
+        ValueError
+            No row at ``wavelength`` (the message lists the data's wavelengths).
         """
         w = float(wavelength)
         sel = np.abs(self.wavelength - w) <= rtol * w

@@ -49,8 +49,21 @@ def _store(v):
 def write_dataset_hdf5(
     path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
 ) -> Path:
-    """Write ``ds`` to HDF5 (atomically; ``dofp_pattern`` [deg] stores DoFP raw frames). Returns the
-    path.
+    """Write ``ds`` to HDF5 (images gzip-compressed, as float32).
+
+    Parameters
+    ----------
+    path : str or Path
+    ds : PolarimetricDataset
+    dofp_pattern : array_like (2, 2) [deg], optional
+        Store DoFP raw frames with this 2x2 layout (four channels needed) instead of channel images.
+    overwrite : bool
+        Replace existing files (otherwise FileExistsError).
+
+    Returns
+    -------
+    Path
+        The file written (atomically).
     """
     import h5py
 
@@ -70,8 +83,20 @@ def write_dataset_hdf5(
 
 
 def read_dataset_hdf5(path) -> PolarimetricDataset:
-    """Read a dataset from HDF5 (ValueError naming the file and key for anything missing or
-    invalid).
+    """Read a dataset from HDF5.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    PolarimetricDataset
+
+    Raises
+    ------
+    ValueError
+        Not an HDF5 file, or a key missing or invalid (named with the file).
     """
     import h5py
 
@@ -95,7 +120,22 @@ def read_dataset_hdf5(path) -> PolarimetricDataset:
 def write_dataset_npz(
     path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
 ) -> Path:
-    """Write ``ds`` to a compressed NPZ (atomically). Returns the path."""
+    """Write ``ds`` to a compressed NPZ (images as float32).
+
+    Parameters
+    ----------
+    path : str or Path
+    ds : PolarimetricDataset
+    dofp_pattern : array_like (2, 2) [deg], optional
+        Store DoFP raw frames with this 2x2 layout (four channels needed) instead of channel images.
+    overwrite : bool
+        Replace existing files (otherwise FileExistsError).
+
+    Returns
+    -------
+    Path
+        The file written (atomically).
+    """
     from scatterlab.runtime.results import write_npz
 
     flat = {k: _store(v) for k, v in to_flat(ds, dofp_pattern=dofp_pattern).items()}
@@ -103,7 +143,21 @@ def write_dataset_npz(
 
 
 def read_dataset_npz(path) -> PolarimetricDataset:
-    """Read a dataset from NPZ (no pickles)."""
+    """Read a dataset from NPZ (no pickles).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    PolarimetricDataset
+
+    Raises
+    ------
+    ValueError
+        Not a readable NPZ file, or a key missing or invalid (named with the file).
+    """
     try:
         with np.load(path, allow_pickle=False) as z:
             flat = {k: z[k] for k in z.files}
@@ -134,9 +188,24 @@ def write_dataset_tiff(
     overwrite: bool = False,
     truth_file: str | None = None,
 ) -> Path:
-    """Write the images as a multi-page float32 TIFF and the rest as the sidecar
-    ``path.with_suffix('.toml')``; the truth (if any) goes to ``truth_file`` (default
-    ``NAME-truth.npz``), named in the sidecar. Returns the TIFF's path."""
+    """Write the images as a multi-page float32 TIFF, the rest as its sidecar TOML.
+
+    Parameters
+    ----------
+    path : str or Path
+    ds : PolarimetricDataset
+    dofp_pattern : array_like (2, 2) [deg], optional
+        Store DoFP raw frames with this 2x2 layout (four channels needed) instead of channel images.
+    overwrite : bool
+        Replace existing files (otherwise FileExistsError).
+    truth_file : str, optional
+        Name of the truth NPZ beside the TIFF (default ``NAME-truth.npz``), named in the sidecar.
+
+    Returns
+    -------
+    Path
+        The file written (atomically).
+    """
     import tifffile
 
     from scatterlab.runtime.results import atomic_write_bytes, write_npz, write_text
@@ -208,8 +277,22 @@ def _load_pages(side: Path, meta: dict, default: Path) -> np.ndarray:
 
 
 def read_dataset_tiff(path) -> PolarimetricDataset:
-    """Read a TIFF stack and its sidecar TOML (``path`` may be either); ValueError naming the file
-    and key.
+    """Read a TIFF stack and its sidecar TOML.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TIFF (its sidecar is ``path.with_suffix(".toml")``) or the sidecar itself.
+
+    Returns
+    -------
+    PolarimetricDataset
+
+    Raises
+    ------
+    ValueError
+        No sidecar, invalid TOML, an unknown layout, missing TIFF files, a page count that does not
+        match the geometries and channels, or an invalid key (named with the file).
     """
     import tomllib
 

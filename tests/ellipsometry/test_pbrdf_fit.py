@@ -2,14 +2,11 @@
 SCATMECH (pySCATMECH) file read through scatterlab.io (an independent forward model and file path).
 """
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 from scatterlab.ellipsometry import depolarization_index, fit_pbrdf
-from scatterlab.io import MuellerBRDF, read_mueller_brdf, write_mueller_brdf
+from scatterlab.io import MuellerBRDF, write_mueller_brdf
 from scatterlab.pbrdf import Model
 from scatterlab.polarization import depolarizer, linear_retarder
 
@@ -63,24 +60,6 @@ def test_normalised_data_and_wavelength_selection():
     fit = fit_pbrdf(norm, wavelength=1.55e-6)
     assert fit.normalised and np.all(np.isnan(fit.residuals[:, 0, 0]))
     assert [fit.n, fit.kappa, fit.sigma] == pytest.approx([ETA.real, -ETA.imag, SIGMA], abs=1e-5)
-
-
-@pytest.mark.peer
-def test_scatmech_file_fitted_through_the_reader(tmp_path):
-    """A SCATMECH Shadowed_Facet_BRDF_Model file (exp(-iwt), signed angles, out of plane) is fitted
-    by the specular pBRDF (diffuse='none', the same physics): the parameters agree to the 6 digits
-    SCATMECH uses."""
-    sys.path.insert(0, str(Path(__file__).parents[1] / "io"))
-    from test_mueller_brdf import ETA as E
-    from test_mueller_brdf import SIGMA as S
-    from test_mueller_brdf import scatmech_file, signed_rows
-
-    data = read_mueller_brdf(
-        scatmech_file(tmp_path / "s.csv", signed_rows()), time_convention="exp(-iwt)"
-    )
-    fit = fit_pbrdf(data, diffuse="none", starts=((1.5, 5.0),))
-    assert [fit.n, fit.kappa, fit.sigma] == pytest.approx([E.real, -E.imag, S], rel=1e-5)
-    assert fit.circular_flip_ratio > 10
 
 
 def test_depolarization_index_limits_and_partial_explanation():

@@ -11,6 +11,7 @@ time convention) is therefore checked against an evaluation that never uses it.
 import numpy as np
 import pytest
 
+from scatterlab.ellipsometry import fit_pbrdf
 from scatterlab.io import MuellerBRDF, read_mueller_brdf, write_mueller_brdf
 from scatterlab.io.table import element_name
 from scatterlab.pbrdf import Model
@@ -245,3 +246,16 @@ def test_bad_arguments_and_binary_file(tmp_path):
     with pytest.raises(ValueError, match="x.npy: not a text table"):
         read_mueller_brdf(npy)
     assert element_name(2, 3, prefix="f_r", normalised=True) == "f_r34/f_r11"
+
+
+@pytest.mark.peer
+def test_scatmech_file_fitted_through_the_reader(tmp_path):
+    """A SCATMECH Shadowed_Facet_BRDF_Model file (exp(-iwt), signed angles, out of plane) is fitted
+    by the specular pBRDF (diffuse='none', the same physics): the parameters agree to the 6 digits
+    SCATMECH uses."""
+    data = read_mueller_brdf(
+        scatmech_file(tmp_path / "s.csv", signed_rows()), time_convention="exp(-iwt)"
+    )
+    fit = fit_pbrdf(data, diffuse="none", starts=((1.5, 5.0),))
+    assert [fit.n, fit.kappa, fit.sigma] == pytest.approx([ETA.real, -ETA.imag, SIGMA], rel=1e-5)
+    assert fit.circular_flip_ratio > 10
