@@ -256,6 +256,17 @@ def _load_pages(side: Path, meta: dict, default: Path) -> np.ndarray:
     import tifffile
 
     names = meta.pop("tiff", None)
+    if names is None and not default.exists():
+        scene = {"plates", "geometry_deg", "image_size", "d_over_r0"} & set(meta)
+        raise ValueError(
+            f"{side}: expected a dataset: no TIFF stack {default.name} beside this TOML and no "
+            "'tiff' key"
+            + (
+                " (it looks like a scene description: run it with `scatterlab characterize`)"
+                if scene
+                else ""
+            )
+        )
     files = (
         [default]
         if names is None

@@ -191,3 +191,10 @@ def test_users_tiff_stack_with_one_file_per_geometry_and_a_minimal_sidecar(tmp_p
     np.testing.assert_allclose(back.counts, ds.counts, rtol=1e-6)
     assert back.truth is None and not back.simulated and back.read_noise is None
     assert back.stokes().shape == (2, 3, 6, 8)
+
+
+def test_a_scene_toml_is_not_a_dataset(tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text("image_size = 64\ngeometry_deg = [30, 50]\n")
+    with pytest.raises(ValueError, match="expected a dataset.*scene description"):
+        read_dataset(scene)
