@@ -102,9 +102,11 @@ def test_fit_mueller_fits_a_scatmech_style_file_and_writes_its_report(tmp_path, 
     assert (out / "elements.png").stat().st_size > 0 and (out / "residuals.png").stat().st_size > 0
     assert main(["fit-mueller", str(path), "--out", str(out)]) == 2  # report exists
     assert "--force" in capsys.readouterr().err
-    # read in the wrong convention, the report says so
-    assert main(["fit-mueller", str(path), "--out", str(out), "--force"]) == 0
-    assert "Time convention?" in (out / "report.md").read_text()
+    # read in the wrong convention, the report says so; a posterior on request
+    argv = ["fit-mueller", str(path), "--out", str(out), "--force", "--posterior-steps", "60"]
+    assert main(argv) == 0
+    report = (out / "report.md").read_text()
+    assert "Time convention?" in report and "Posterior (emcee, 24 walkers x 60 steps" in report
 
 
 def test_fit_mueller_bad_input_exit_codes(tmp_path, capsys):

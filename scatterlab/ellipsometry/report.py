@@ -138,6 +138,16 @@ def _markdown(data, fit, source, convention, seconds) -> str:
         f"{seconds:.1f} s.",
         "",
     ]
+    if fit.posterior is not None:
+        post = fit.posterior
+        med, sd = np.median(post["samples"], 0), post["samples"].std(0)
+        lines += [
+            f"Posterior (emcee, {post['walkers']} walkers x {post['steps']} steps, first half "
+            f"discarded; acceptance {post['acceptance']:.2f}): n = {med[0]:.6g} +- {sd[0]:.3g}, "
+            f"kappa = {med[1]:.6g} +- {sd[1]:.3g}, sigma = {med[2]:.6g} +- {sd[2]:.3g} "
+            "(median +- standard deviation).",
+            "",
+        ]
     if not fit.determined:
         lines += [
             "**The data do not determine all three parameters** (rank-deficient Jacobian): the "

@@ -76,7 +76,6 @@ def test_depolarization_index_limits_and_partial_explanation():
     assert fit.depolarization["measured_mean"] > fit.depolarization["model_mean"]
 
 
-@pytest.mark.slow
 def test_posterior_agrees_with_the_covariance():
     """emcee (24 walkers x 600 steps, half burn-in) around the fit: posterior sd within 30 % of the
     linearised standard errors (the chain's sd is estimated to ~10 % at this length) and medians
