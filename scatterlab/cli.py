@@ -2,10 +2,11 @@
 
 ::
 
-    scatterlab study list scatterlab study run ID [--quick] [--out DIR] [--seed N] [--force]
-    scatterlab study run all [--quick] [--out DIR] scatterlab characterize [SCENE.toml] [--out DIR]
-    [--force] [--quick] scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W]
-    [--time-convention exp(-iwt)] [--force]
+    scatterlab study list
+    scatterlab study run ID [--quick] [--out DIR] [--seed N] [--force]
+    scatterlab study run all [--quick] [--out DIR]
+    scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
+    scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--time-convention exp(-iwt)]
 
 Sweeps inside studies use ``--workers N`` local processes or a Dask cluster
 given by ``--scheduler ADDRESS``.
@@ -42,17 +43,15 @@ def _study(args) -> int:
     ex = _executor(args)
     try:
         if args.id == "all":
-            index, status = studies.run_all(
-                args.out, quick=args.quick, seed=args.seed, force=True, executor=ex
-            )
+            index, status = studies.run_all(args.out, quick=args.quick, seed=args.seed, force=True,
+                                            executor=ex)
             failed = {k: v for k, v in status.items() if v != "ok"}
             print(f"index: {index}")
             for k, v in failed.items():
                 print(f"FAILED {k}: {v}", file=sys.stderr)
             return 1 if failed else 0
-        report = studies.run_study(
-            args.id, args.out, quick=args.quick, seed=args.seed, force=args.force, executor=ex
-        )
+        report = studies.run_study(args.id, args.out, quick=args.quick, seed=args.seed, force=args.force,
+                                   executor=ex)
         print(f"report: {report}")
         return 0
     except (ValueError, FileExistsError) as exc:
@@ -106,11 +105,7 @@ def _characterize(args) -> int:
     try:
         cfg = _load_scene_file(args.scene) if args.scene else default_scene()
         if args.quick:  # a small, fast version of the same scene (tests, smoke runs)
-            cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = (
-                48,
-                cfg.geometry_deg[::3],
-                cfg.d_over_r0[:1],
-            )
+            cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = 48, cfg.geometry_deg[::3], cfg.d_over_r0[:1]
             cfg.iterations, cfg.posterior_steps = 15, 400
         ex = _executor(args)
         try:
@@ -240,30 +235,20 @@ def main(argv=None) -> int:
     sub = parser.add_subparsers(
         dest="command", required=True, metavar="COMMAND", help=argparse.SUPPRESS
     )
-    st = sub.add_parser(
-        "study", help="list or run the studies that reproduce the reference figures"
-    )
+    st = sub.add_parser("study", help="list or run the studies that reproduce the reference figures")
     st.add_argument("action", choices=["list", "run"])
     st.add_argument("id", nargs="?", help="study id, or 'all'")
     st.add_argument("--quick", action="store_true", help="small sizes (under a minute per study)")
     st.add_argument("--out", default=None, help="output folder (default results/[quick/]ID)")
-    st.add_argument(
-        "--seed", type=int, default=20101210, help="random seed recorded in metrics.json"
-    )
+    st.add_argument("--seed", type=int, default=20101210, help="random seed recorded in metrics.json")
     st.add_argument("--force", action="store_true", help="replace an existing report")
     st.add_argument("--workers", type=int, default=None, help="local worker processes for sweeps")
     st.add_argument("--scheduler", default=None, help="Dask scheduler address for sweeps")
-    ch = sub.add_parser(
-        "characterize", help="simulate, deconvolve, classify and characterize a scene (main job)"
-    )
-    ch.add_argument(
-        "scene", nargs="?", help="scene description (TOML); default: the bundled painted plates"
-    )
+    ch = sub.add_parser("characterize", help="simulate, deconvolve, classify and characterize a scene (main job)")
+    ch.add_argument("scene", nargs="?", help="scene description (TOML); default: the bundled painted plates")
     ch.add_argument("--out", default="results/characterize", help="output folder")
     ch.add_argument("--force", action="store_true", help="replace an existing report")
-    ch.add_argument(
-        "--quick", action="store_true", help="smaller images, fewer geometries and iterations"
-    )
+    ch.add_argument("--quick", action="store_true", help="smaller images, fewer geometries and iterations")
     ch.add_argument("--workers", type=int, default=None, help="local worker processes")
     ch.add_argument("--scheduler", default=None, help="Dask scheduler address")
     _add_fit_mueller(sub)
