@@ -6,6 +6,7 @@
     scatterlab study run ID [--quick] [--out DIR] [--seed N] [--force]
     scatterlab study run all [--quick] [--out DIR]
     scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
+    scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--time-convention exp(-iwt)]
 
 Sweeps inside studies use ``--workers N`` local processes or a Dask cluster
 given by ``--scheduler ADDRESS``.
@@ -60,11 +61,49 @@ def _study(args) -> int:
         ex.close()
 
 
+DESCRIPTION = """\
+scatterlab: polarimetric light scattering from rough surfaces. Simulates and inverts the
+polarimetric BRDF (pBRDF) of rough surfaces, turbulence-degraded polarimetric images and Mueller
+ellipsometry, and fits the complex index n - j kappa and roughness of materials to measured data.
+
+commands:
+  study          list or run the studies that reproduce the reference text's figures and tables
+  characterize   simulate, deconvolve, classify and invert a painted-plate scene (TOML) end to end
+  fit-mueller    fit n, kappa, sigma of the pBRDF to a measured Mueller BRDF table (CSV) and report
+
+Run `scatterlab COMMAND --help` for a command's options. Angles are in degrees on the command line
+and in files, radians in the Python API.
+"""
+
+
+def _load_scene_file(path):
+    """The scene of a TOML file; ValueError "expected a TOML scene" for any other kind of file."""
+    import tomllib
+    from pathlib import Path
+
+    from scatterlab.characterization import load_scene
+
+    p = Path(path)
+    if p.suffix.lower() != ".toml":
+        raise ValueError(
+            f"expected a TOML scene (.toml), got {p.name!r}"
+            + (
+                " (a dataset of channel images, not a scene)"
+                if p.suffix.lower() in (".h5", ".hdf5", ".npz", ".tif", ".tiff")
+                else ""
+            )
+        )
+    try:
+        return load_scene(p)
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise ValueError(f"expected a TOML scene: {p.name} is not valid TOML ({exc})") from None
+
+
 def _characterize(args) -> int:
-    from scatterlab.characterization import characterize, default_scene, load_scene
+    from scatterlab.characterization import characterize, default_scene
 
     try:
-        cfg = load_scene(args.scene) if args.scene else default_scene()
+        cfg = _load_scene_file(args.scene) if args.scene else default_scene()
         if args.quick:  # a small, fast version of the same scene (tests, smoke runs)
             cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = 64, cfg.geometry_deg[::3], cfg.d_over_r0[:1]
             cfg.iterations, cfg.posterior_steps = 15, 400
@@ -80,10 +119,122 @@ def _characterize(args) -> int:
     return 0
 
 
+def _fit_mueller(args) -> int:
+    import time
+
+    import numpy as np
+
+    from scatterlab.ellipsometry import fit_pbrdf
+    from scatterlab.ellipsometry.report import write_fit_report
+    from scatterlab.io import read_mueller_brdf
+
+    try:
+        data = read_mueller_brdf(
+            args.file,
+            angle_unit=args.angle_unit,
+            wavelength_unit=args.wavelength_unit,
+            time_convention=args.time_convention,
+        )
+        if args.wavelength_um is not None:
+            data = data.select(args.wavelength_um * 1e-6)
+        elif data.wavelengths.size > 1:
+            have = ", ".join(f"{w * 1e6:g}" for w in data.wavelengths)
+            raise ValueError(
+                f"{args.file} holds several wavelengths ({have} um): choose one with "
+                "--wavelength-um"
+            )
+        t0 = time.perf_counter()
+        fit = fit_pbrdf(
+            data,
+            shadowing=args.shadowing,
+            diffuse=args.diffuse,
+            posterior_steps=args.posterior_steps,
+            rng=args.seed,
+        )
+        report = write_fit_report(
+            data,
+            fit,
+            args.out,
+            source=args.file,
+            convention=args.time_convention,
+            seconds=time.perf_counter() - t0,
+            overwrite=args.force,
+        )
+    except (ValueError, FileExistsError, FileNotFoundError) as exc:
+        print(f"scatterlab: {exc}", file=sys.stderr)
+        return 2
+    e = fit.errors
+    quality = (
+        f"reduced chi^2 {fit.reduced_chi2:.3g}"
+        if fit.weighted
+        else f"rms residual {np.sqrt(fit.reduced_chi2):.3g}" + ("" if fit.normalised else " of m11")
+    )
+    print(
+        f"n = {fit.n:.5g} +- {e[0]:.2g}, kappa = {fit.kappa:.5g} +- {e[1]:.2g}, "
+        f"sigma = {fit.sigma:.4g} +- {e[2]:.2g} ({quality})"
+    )
+    print(f"report: {report}")
+    return 0
+
+
+def _add_fit_mueller(sub):
+    fm = sub.add_parser(
+        "fit-mueller",
+        help="fit n, kappa, sigma of the pBRDF to a measured Mueller BRDF table",
+        description="Fit n, kappa and sigma of the pBRDF to all 16 elements of a Mueller BRDF "
+        "table (long CSV, e.g. NIST SCATMECH's lambda,thetai,phii,thetar,phir,f_r11,"
+        "f_r12/f_r11,...); writes figures, report.md and metrics.json.",
+    )
+    fm.add_argument("file", help="Mueller BRDF table (CSV), one row per geometry")
+    fm.add_argument("--out", default="results/fit-mueller", help="output folder")
+    fm.add_argument(
+        "--wavelength-um",
+        type=float,
+        default=None,
+        help="wavelength to fit when the file has several",
+    )
+    fm.add_argument(
+        "--angle-unit", default="deg", choices=["deg", "rad"], help="unit of the angle columns"
+    )
+    fm.add_argument(
+        "--wavelength-unit",
+        default="um",
+        choices=["um", "nm", "mm", "m"],
+        help="unit of the wavelength column",
+    )
+    fm.add_argument(
+        "--time-convention",
+        default="exp(+jwt)",
+        choices=["exp(+jwt)", "exp(-iwt)"],
+        help="the file's time convention (exp(-iwt): NIST SCATMECH; flips the circular elements)",
+    )
+    fm.add_argument(
+        "--shadowing", default="torrance-sparrow", help="pBRDF shadowing (torrance-sparrow, none)"
+    )
+    fm.add_argument(
+        "--diffuse",
+        default="hyde",
+        choices=["hyde", "reciprocal", "none"],
+        help="pBRDF diffuse term",
+    )
+    fm.add_argument(
+        "--posterior-steps", type=int, default=0, help="emcee steps per walker (0: no posterior)"
+    )
+    fm.add_argument("--seed", type=int, default=20101210, help="seed of the posterior sampler")
+    fm.add_argument("--force", action="store_true", help="replace an existing report")
+
+
 def main(argv=None) -> int:
     """Entry point of the ``scatterlab`` command; returns the exit status."""
-    parser = argparse.ArgumentParser(prog="scatterlab", description=__doc__.split("\n")[0])
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser = argparse.ArgumentParser(
+        prog="scatterlab",
+        description=DESCRIPTION,
+        usage="scatterlab [-h] COMMAND ...",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sub = parser.add_subparsers(
+        dest="command", required=True, metavar="COMMAND", help=argparse.SUPPRESS
+    )
     st = sub.add_parser("study", help="list or run the studies that reproduce the reference figures")
     st.add_argument("action", choices=["list", "run"])
     st.add_argument("id", nargs="?", help="study id, or 'all'")
@@ -100,11 +251,14 @@ def main(argv=None) -> int:
     ch.add_argument("--quick", action="store_true", help="smaller images, fewer geometries and iterations")
     ch.add_argument("--workers", type=int, default=None, help="local worker processes")
     ch.add_argument("--scheduler", default=None, help="Dask scheduler address")
+    _add_fit_mueller(sub)
     args = parser.parse_args(argv)
     if args.command == "study":
         return _study(args)
     if args.command == "characterize":
         return _characterize(args)
+    if args.command == "fit-mueller":
+        return _fit_mueller(args)
     return 2  # pragma: no cover
 
 

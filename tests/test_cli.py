@@ -33,3 +33,96 @@ def test_study_run_all_writes_index(tmp_path, monkeypatch):
 
 def test_unknown_study_exit_code(capsys):
     assert main(["study", "run", "nope", "--quick"]) == 2
+
+
+def test_help_says_what_the_tool_does_and_lists_each_command(capsys):
+    import pytest
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    assert "polarimetric light scattering" in out
+    for command in ("study", "characterize", "fit-mueller"):
+        lines = [ln for ln in out.splitlines() if ln.strip().startswith(command + " ")]
+        assert len(lines) == 1, command
+
+
+def test_characterize_refuses_other_kinds_of_file(tmp_path, capsys):
+    import numpy as np
+
+    np.save(tmp_path / "channels.npy", np.zeros(3))
+    (tmp_path / "table.csv").write_text("a,b\n1,2\n")
+    (tmp_path / "binary.toml").write_bytes(b"\x93NUMPY\x00\xff")
+    for name in ("channels.npy", "table.csv", "binary.toml"):
+        assert main(["characterize", str(tmp_path / name), "--out", str(tmp_path / "out")]) == 2
+        assert "expected a TOML scene" in capsys.readouterr().err, name
+
+
+def _scatmech_style_file(path, eta=1.39 - 0.34j, sigma=0.3):
+    import numpy as np
+
+    from scatterlab.io import MuellerBRDF, write_mueller_brdf
+    from scatterlab.pbrdf import Model
+
+    rng = np.random.default_rng(5)
+    ti = np.radians(np.r_[np.full(12, 30.0), np.full(8, 50.0)])
+    tr = np.radians(np.r_[np.linspace(5, 75, 12), np.linspace(15, 70, 8)])
+    phi = np.r_[np.tile([0.0, np.pi], 6), np.linspace(np.pi / 3, np.pi, 8)]
+    M = Model(sigma).mueller(eta, ti, tr, phi)
+    M = M + 0.005 * M[:, :1, :1] * rng.standard_normal(M.shape)
+    return write_mueller_brdf(
+        path,
+        MuellerBRDF(1.55e-6, ti, tr, phi, M),
+        normalised=True,
+        signed=True,
+        time_convention="exp(-iwt)",
+        description="simulated",
+    )
+
+
+def test_fit_mueller_fits_a_scatmech_style_file_and_writes_its_report(tmp_path, capsys):
+    import json
+
+    import pytest
+
+    path = _scatmech_style_file(tmp_path / "paint.csv")
+    assert ",-" in path.read_text()  # signed polar angles in the file
+    out = tmp_path / "fit"
+    assert (
+        main(["fit-mueller", str(path), "--out", str(out), "--time-convention", "exp(-iwt)"]) == 0
+    )
+    assert "n = 1.39" in capsys.readouterr().out
+    metrics = json.loads((out / "metrics.json").read_text())["fit"]
+    # 0.5 % noise of m11 on 16 elements x 20 geometries: within 4 standard errors (seed fixed)
+    for name, truth in (("n", 1.39), ("kappa", 0.34), ("sigma", 0.3)):
+        assert metrics[name] == pytest.approx(truth, abs=4 * metrics["errors"][name])
+    report = (out / "report.md").read_text()
+    assert "explains" in report and "signed observation angles" in report
+    assert (out / "elements.png").stat().st_size > 0 and (out / "residuals.png").stat().st_size > 0
+    assert main(["fit-mueller", str(path), "--out", str(out)]) == 2  # report exists
+    assert "--force" in capsys.readouterr().err
+    # read in the wrong convention, the report says so; a posterior on request
+    argv = ["fit-mueller", str(path), "--out", str(out), "--force", "--posterior-steps", "60"]
+    assert main(argv) == 0
+    report = (out / "report.md").read_text()
+    assert "Time convention?" in report and "Posterior (emcee, 24 walkers x 60 steps" in report
+
+
+def test_fit_mueller_bad_input_exit_codes(tmp_path, capsys):
+    from scatterlab.io import MuellerBRDF, read_mueller_brdf, write_mueller_brdf
+
+    path = _scatmech_style_file(tmp_path / "p.csv")
+    assert main(["fit-mueller", str(tmp_path / "missing.csv"), "--out", str(tmp_path / "o")]) == 2
+    assert "missing.csv" in capsys.readouterr().err
+    data = read_mueller_brdf(path, time_convention="exp(-iwt)")
+    two = MuellerBRDF(
+        list(data.wavelength) + [1.064e-6],
+        list(data.theta_i) * 1 + [0.3],
+        list(data.theta_r) + [0.3],
+        list(data.phi) + [3.0],
+        list(data.mueller) + [data.mueller[0]],
+    )
+    write_mueller_brdf(tmp_path / "two.csv", two)
+    assert main(["fit-mueller", str(tmp_path / "two.csv"), "--out", str(tmp_path / "o")]) == 2
+    assert "--wavelength-um" in capsys.readouterr().err

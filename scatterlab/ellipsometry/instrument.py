@@ -6,13 +6,13 @@ A measurement with 4 generated and 4 analysed states is the 4x4 intensity matrix
 
 where the columns of ``W`` are the Stokes vectors leaving the PSG and the rows of ``A`` are the
 analysis vectors of the PSA (the first row of the PSA's Mueller chain, the detector measuring
-:math:`S_0`). The sample Mueller matrix is then :math:`\mathbf M = \mathbf A^{-1}\mathbf B\mathbf W^{-1}`
-(Eq. 184). Designs:
+:math:`S_0`). The sample Mueller matrix is then :math:`\mathbf M = \mathbf A^{-1}\mathbf B\mathbf
+W^{-1}` (Eq. 184). Designs:
 
-* :func:`switched_wave_plate_psg` -- the reference's 1064 nm instrument (Sec. 4.4): a polarizing beam
-  splitter (horizontal polarizer) followed by two half-wave plates and a quarter-wave plate moved in
-  and out of the beam; the four configurations used here are nothing, HWP at 45 deg (V), HWP at 22.5 deg
-  (+45) and QWP at 45 deg (circular). The PSA is its mirror image.
+* :func:`switched_wave_plate_psg` -- the reference's 1064 nm instrument (Sec. 4.4): a polarizing
+  beam splitter (horizontal polarizer) followed by two half-wave plates and a quarter-wave plate
+  moved in and out of the beam; the four configurations used here are nothing, HWP at 45 deg (V),
+  HWP at 22.5 deg (+45) and QWP at 45 deg (circular). The PSA is its mirror image.
 * :func:`rotating_retarder_psg` -- a polarizer followed by a retarder at four azimuths.
 * :func:`tetrahedral_psg` -- the optimal design: states at the vertices of a regular tetrahedron on
   the Poincare sphere (condition number sqrt(3), the minimum for 4 states).
@@ -30,9 +30,17 @@ import numpy as np
 from scatterlab._checks import as_finite
 from scatterlab.polarization import linear_polarizer, linear_retarder
 
-__all__ = ["Errors", "switched_wave_plate_psg", "switched_wave_plate_psa", "rotating_retarder_psg",
-           "rotating_retarder_psa", "tetrahedral_psg", "tetrahedral_psa", "Instrument",
-           "condition_number"]
+__all__ = [
+    "Errors",
+    "switched_wave_plate_psg",
+    "switched_wave_plate_psa",
+    "rotating_retarder_psg",
+    "rotating_retarder_psa",
+    "tetrahedral_psg",
+    "tetrahedral_psa",
+    "Instrument",
+    "condition_number",
+]
 
 
 @dataclass(frozen=True)
@@ -60,7 +68,12 @@ class Errors:
         return value[k] if np.ndim(value) else value
 
 
-_SWITCHED_PLATES = (None, (np.pi, np.pi / 4), (np.pi, np.pi / 8), (np.pi / 2, np.pi / 4))  # none, V, +45, circular
+_SWITCHED_PLATES = (
+    None,
+    (np.pi, np.pi / 4),
+    (np.pi, np.pi / 8),
+    (np.pi / 2, np.pi / 4),
+)  # none, V, +45, circular
 
 
 def _switched_arm(errors: Errors):
@@ -71,22 +84,47 @@ def _switched_arm(errors: Errors):
         if plate is None:
             plates.append(np.eye(4))
         else:
-            plates.append(linear_retarder(plate[0] + errors.per_state(errors.retardance, k),
-                                          plate[1] + errors.per_state(errors.azimuth, k)))
+            plates.append(
+                linear_retarder(
+                    plate[0] + errors.per_state(errors.retardance, k),
+                    plate[1] + errors.per_state(errors.azimuth, k),
+                )
+            )
     return P, plates
 
 
 def switched_wave_plate_psg(errors: Errors = Errors()) -> np.ndarray:
-    """W of the reference's switched wave-plate PSG (columns: H, V, +45, circular), shape (4, 4).
+    """W of the reference's switched wave-plate PSG (columns: H, V, +45, circular).
 
-    Unit-intensity unpolarized source before the polarizer, scaled so an ideal state has S0 = 1.
+    Parameters
+    ----------
+    errors : Errors
+        Imperfections of the arm (retardance and azimuth errors per configuration, polarizer
+        extinction).
+
+    Returns
+    -------
+    ndarray (4, 4)
+        Generated Stokes vectors as columns; unit-intensity unpolarized source before the polarizer,
+        scaled so an ideal state has S0 = 1.
     """
     P, plates = _switched_arm(errors)
     return np.stack([2 * (R @ P)[:, 0] for R in plates], axis=1)
 
 
 def switched_wave_plate_psa(errors: Errors = Errors()) -> np.ndarray:
-    """A of the mirror-image PSA (wave plates, then a horizontal polarizer, then the detector), shape (4, 4)."""
+    """A of the mirror-image PSA (wave plates, then a horizontal polarizer, then the detector).
+
+    Parameters
+    ----------
+    errors : Errors
+        Imperfections of the arm.
+
+    Returns
+    -------
+    ndarray (4, 4)
+        Analysis vectors as rows.
+    """
     P, plates = _switched_arm(errors)
     return np.stack([2 * (P @ R)[0] for R in plates], axis=0)
 
@@ -94,37 +132,108 @@ def switched_wave_plate_psa(errors: Errors = Errors()) -> np.ndarray:
 _RR_ANGLES = np.radians([-51.7, -15.1, 15.1, 51.7])  # a common near-optimal rotating-retarder set
 
 
-def rotating_retarder_psg(angles=_RR_ANGLES, retardance: float = np.radians(132), errors: Errors = Errors()):
-    """W of a polarizer followed by a retarder at ``angles`` (defaults: a near-optimal 132 deg design)."""
+def rotating_retarder_psg(
+    angles=_RR_ANGLES, retardance: float = np.radians(132), errors: Errors = Errors()
+):
+    """W of a polarizer followed by a retarder at four azimuths.
+
+    Parameters
+    ----------
+    angles : array_like (4,) [rad]
+        Retarder azimuths (default +-15.1 and +-51.7 deg, near-optimal with 132 deg).
+    retardance : float [rad]
+    errors : Errors
+        Per-configuration retardance and azimuth errors, polarizer azimuth and extinction.
+
+    Returns
+    -------
+    ndarray (4, 4)
+        Generated Stokes vectors as columns.
+    """
     angles = as_finite(angles, "angles")
     P = linear_polarizer(errors.polarizer_azimuth, errors.extinction_ratio)
-    cols = [2 * (linear_retarder(retardance + errors.per_state(errors.retardance, k),
-                                 a + errors.per_state(errors.azimuth, k)) @ P)[:, 0] for k, a in enumerate(angles)]
+    cols = [
+        2
+        * (
+            linear_retarder(
+                retardance + errors.per_state(errors.retardance, k),
+                a + errors.per_state(errors.azimuth, k),
+            )
+            @ P
+        )[:, 0]
+        for k, a in enumerate(angles)
+    ]
     return np.stack(cols, axis=1)
 
 
-def rotating_retarder_psa(angles=_RR_ANGLES, retardance: float = np.radians(132), errors: Errors = Errors()):
-    """A of a retarder at ``angles`` followed by a polarizer (the mirror of :func:`rotating_retarder_psg`)."""
+def rotating_retarder_psa(
+    angles=_RR_ANGLES, retardance: float = np.radians(132), errors: Errors = Errors()
+):
+    """A of a retarder at ``angles`` followed by a polarizer (the mirror of
+    :func:`rotating_retarder_psg`).
+
+    Parameters
+    ----------
+    angles : array_like (4,) [rad]
+    retardance : float [rad]
+    errors : Errors
+
+    Returns
+    -------
+    ndarray (4, 4)
+        Analysis vectors as rows.
+    """
     angles = as_finite(angles, "angles")
     P = linear_polarizer(errors.polarizer_azimuth, errors.extinction_ratio)
-    rows = [2 * (P @ linear_retarder(retardance + errors.per_state(errors.retardance, k),
-                                     a + errors.per_state(errors.azimuth, k)))[0] for k, a in enumerate(angles)]
+    rows = [
+        2
+        * (
+            P
+            @ linear_retarder(
+                retardance + errors.per_state(errors.retardance, k),
+                a + errors.per_state(errors.azimuth, k),
+            )
+        )[0]
+        for k, a in enumerate(angles)
+    ]
     return np.stack(rows, axis=0)
 
 
 def tetrahedral_psg() -> np.ndarray:
-    """W with fully polarized unit states at the vertices of a regular tetrahedron on the Poincare sphere."""
+    """W with fully polarized unit states at the vertices of a regular tetrahedron on the Poincare
+    sphere.
+
+    Returns
+    -------
+    ndarray (4, 4)
+        Generated Stokes vectors as columns (condition number sqrt(3), the optimum).
+    """
     v = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]) / np.sqrt(3)
     return np.vstack([np.ones(4), v.T])
 
 
 def tetrahedral_psa() -> np.ndarray:
-    """A with analysis vectors at the tetrahedron vertices (transpose of :func:`tetrahedral_psg`)."""
+    """A with analysis vectors at the tetrahedron vertices (transpose of :func:`tetrahedral_psg`).
+
+    Returns
+    -------
+    ndarray (4, 4)
+    """
     return tetrahedral_psg().T
 
 
 def condition_number(X) -> float:
-    """2-norm condition number of a 4x4 PSG or PSA matrix (sqrt(3) is optimal for 4 states)."""
+    """2-norm condition number of a PSG or PSA matrix.
+
+    Parameters
+    ----------
+    X : array_like (4, 4)
+
+    Returns
+    -------
+    float
+        sqrt(3) is optimal for 4 states.
+    """
     return float(np.linalg.cond(np.asarray(X, float)))
 
 
@@ -157,12 +266,43 @@ class Instrument:
         return condition_number(self.W), condition_number(self.A)
 
     def intensities(self, M) -> np.ndarray:
-        """Noise-free ``B = A M W`` for Mueller matrices ``(..., 4, 4)``."""
+        """Noise-free intensities ``B = A M W``.
+
+        Parameters
+        ----------
+        M : array_like (..., 4, 4)
+            Sample Mueller matrices.
+
+        Returns
+        -------
+        ndarray (..., 4, 4)
+        """
         return self.A @ np.asarray(M, float) @ self.W
 
-    def measure(self, M, rng=None, *, noise: float = 0.0, noise_floor: float = 0.0, repeats: int = 1,
-                relative_to: str = "each"):
-        """Mean and standard deviation of ``repeats`` noisy measurements of ``M`` ``(..., 4, 4)``.
+    def measure(
+        self,
+        M,
+        rng=None,
+        *,
+        noise: float = 0.0,
+        noise_floor: float = 0.0,
+        repeats: int = 1,
+        relative_to: str = "each",
+    ):
+        """Mean and standard deviation of ``repeats`` noisy measurements of ``M``.
+
+        Parameters
+        ----------
+        M : array_like (..., 4, 4)
+            Sample Mueller matrices.
+        rng : anything ``numpy.random.default_rng`` accepts
+        noise : float
+            Relative Gaussian noise (of each reading or of the largest, see ``relative_to``).
+        noise_floor : float
+            Absolute noise standard deviation added to the relative one (same units as B).
+        repeats : int
+            Measurements averaged (>= 1).
+        relative_to : {"each", "max"}
 
         Returns
         -------
@@ -176,7 +316,9 @@ class Instrument:
             raise ValueError("relative_to must be 'each' or 'max'")
         rng = np.random.default_rng(rng)
         B = self.intensities(M)
-        ref = np.abs(B) if relative_to == "each" else np.max(np.abs(B), axis=(-2, -1), keepdims=True)
+        ref = (
+            np.abs(B) if relative_to == "each" else np.max(np.abs(B), axis=(-2, -1), keepdims=True)
+        )
         scale = noise * ref + noise_floor
         draws = B + scale * rng.standard_normal((repeats,) + B.shape)
         std = draws.std(axis=0, ddof=1) if repeats > 1 else np.zeros_like(B)

@@ -1,13 +1,11 @@
 """ECM against known truth: simulated imperfect instruments with known W and A."""
 
-
 import numpy as np
 import pytest
+from conftest import NOMINAL, TRUE_AZ, measure_references
 
 from scatterlab.ellipsometry import Instrument, ecm_calibrate
 from scatterlab.polarization import diattenuator, is_physical_mueller, linear_retarder
-
-from conftest import NOMINAL, TRUE_AZ, measure_references
 
 SAMPLE = linear_retarder(0.9, 0.35) @ diattenuator(0.8, 0.3, 1.1)
 
@@ -31,8 +29,9 @@ def test_grid_search_without_nominal_azimuths(instrument):
 
 
 def test_orientation_errors_recovered_at_1e3_noise(instrument):
-    """Azimuths 1.2-1.8 deg away from nominal are fitted from single-shot data with noise 1e-3 of the largest
-    intensity: RMS error < 0.05 deg over 30 calibrations x 3 fitted azimuths (the RMS is estimated to ~8 %)."""
+    """Azimuths 1.2-1.8 deg away from nominal are fitted from single-shot data with noise 1e-3 of
+    the largest intensity: RMS error < 0.05 deg over 30 calibrations x 3 fitted azimuths (the RMS is
+    estimated to ~8 %)."""
     rng = np.random.default_rng(1)
     errors = []
     for _ in range(30):
@@ -63,8 +62,14 @@ def test_quality_diagnostic_scales_as_noise_squared(instrument):
     rng = np.random.default_rng(3)
     q = {}
     for noise in (1e-5, 1e-3):
-        q[noise] = np.median([ecm_calibrate(*measure_references(instrument, rng, noise=noise), refine=False).quality
-                              for _ in range(15)])
+        q[noise] = np.median(
+            [
+                ecm_calibrate(
+                    *measure_references(instrument, rng, noise=noise), refine=False
+                ).quality
+                for _ in range(15)
+            ]
+        )
     slope = np.log10(q[1e-3] / q[1e-5]) / 2
     assert slope == pytest.approx(2.0, abs=0.25)
 
@@ -103,8 +108,22 @@ def test_ill_conditioned_instrument_warns():
     W[0] = 1.0
     inst = Instrument(W, np.eye(4) + 0.1)
     B0 = inst.intensities(np.eye(4))
-    refs = [("polarizer", inst.intensities(m), a) for m, a in
-            zip([diattenuator(1, 1e-4, a) for a in NOMINAL[:3]], NOMINAL[:3])]
-    refs.append(("retarder", inst.intensities(linear_retarder(np.radians(88), NOMINAL[3])), NOMINAL[3]))
+    refs = [
+        ("polarizer", inst.intensities(m), a)
+        for m, a in zip([diattenuator(1, 1e-4, a) for a in NOMINAL[:3]], NOMINAL[:3])
+    ]
+    refs.append(
+        ("retarder", inst.intensities(linear_retarder(np.radians(88), NOMINAL[3])), NOMINAL[3])
+    )
     with pytest.warns(RuntimeWarning, match="ill-conditioned"):
         ecm_calibrate(B0, refs)
+
+
+def test_mueller_of_nan_intensities_is_a_clear_error(instrument):
+    cal = ecm_calibrate(*measure_references(instrument))
+    B = instrument.intensities(SAMPLE)
+    B[1, 1] = np.nan
+    with pytest.raises(ValueError, match="B .*finite"):
+        cal.mueller(B)
+    with pytest.raises(ValueError, match="B .*finite"):
+        cal.mueller(np.full((4, 4), np.inf))

@@ -8,7 +8,9 @@ from scatterlab.pbrdf import Model
 THETA = np.radians(np.arange(10, 81, 10))
 
 
-@pytest.mark.parametrize("eta, sigma", [(0.285 - 7.3523j, 0.44), (1.226 - 10.413j, 0.43), (3.6 - 5.88j, 0.2)])
+@pytest.mark.parametrize(
+    "eta, sigma", [(0.285 - 7.3523j, 0.44), (1.226 - 10.413j, 0.43), (3.6 - 5.88j, 0.2)]
+)
 def test_noise_free_fit_recovers_eta_and_sigma(eta, sigma):
     y = normalised_elements(Model(sigma).mueller(eta, THETA, THETA, np.pi))
     fit = fit_mueller_elements(THETA, y)
@@ -23,9 +25,13 @@ def test_known_sigma_and_covariance_scaling():
     y = model_elements(THETA, eta.real, -eta.imag, sigma)
     rng = np.random.default_rng(0)
     std = np.full_like(y, 2e-3)
-    fit = fit_mueller_elements(THETA, y + std * rng.standard_normal(y.shape), std=std, sigma=sigma, fit_sigma=False)
+    fit = fit_mueller_elements(
+        THETA, y + std * rng.standard_normal(y.shape), std=std, sigma=sigma, fit_sigma=False
+    )
     assert fit.sigma == sigma
-    assert abs(fit.n - eta.real) < 5 * fit.errors[0] and abs(fit.kappa + eta.imag) < 5 * fit.errors[1]
+    assert (
+        abs(fit.n - eta.real) < 5 * fit.errors[0] and abs(fit.kappa + eta.imag) < 5 * fit.errors[1]
+    )
 
 
 def test_bad_input():
@@ -35,3 +41,19 @@ def test_bad_input():
         fit_mueller_elements(THETA, np.zeros((THETA.size, 4)), fit_sigma=False)
     with pytest.raises(ValueError, match="theta"):
         fit_mueller_elements(THETA + 2, np.zeros((THETA.size, 4)))
+
+
+def test_rejects_negative_std_and_elements_outside_the_unit_interval():
+    y = model_elements(THETA, 1.4, 7.0, 0.3)
+    with pytest.raises(ValueError, match="std"):
+        fit_mueller_elements(THETA, y, std=np.full_like(y, -1e-3))
+    with pytest.raises(ValueError, match="std"):
+        fit_mueller_elements(THETA, y, std=np.zeros_like(y))
+    bad = y.copy()
+    bad[2, 1] = 1.2  # e.g. a percent/fraction mix-up or a wrong normalisation
+    with pytest.raises(ValueError, match=r"measured\[2, 1\] = 1.2.*\[-1, 1\]"):
+        fit_mueller_elements(THETA, bad)
+    bad[2, 1] = 1.03  # within the stated tolerance (noise)
+    fit_mueller_elements(THETA, bad, starts=((1.5, 10.0),))
+    with pytest.raises(ValueError, match="starts"):
+        fit_mueller_elements(THETA, y, starts=())

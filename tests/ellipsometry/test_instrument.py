@@ -1,8 +1,15 @@
 import numpy as np
 import pytest
 
-from scatterlab.ellipsometry import (Instrument, condition_number, rotating_retarder_psg, switched_wave_plate_psa,
-                                     switched_wave_plate_psg, tetrahedral_psa, tetrahedral_psg)
+from scatterlab.ellipsometry import (
+    Instrument,
+    condition_number,
+    rotating_retarder_psg,
+    switched_wave_plate_psa,
+    switched_wave_plate_psg,
+    tetrahedral_psa,
+    tetrahedral_psg,
+)
 from scatterlab.polarization import dop, is_physical_mueller, linear_retarder
 
 
@@ -10,16 +17,20 @@ def test_tetrahedral_design_is_optimal():
     # sqrt(3) is the smallest possible condition number of a 4-state polarimeter (Tyo 2002)
     assert condition_number(tetrahedral_psg()) == pytest.approx(np.sqrt(3))
     assert condition_number(tetrahedral_psa()) == pytest.approx(np.sqrt(3))
-    assert condition_number(rotating_retarder_psg()) < 1.8  # the 132 deg / +-15.1, +-51.7 deg design
+    assert (
+        condition_number(rotating_retarder_psg()) < 1.8
+    )  # the 132 deg / +-15.1, +-51.7 deg design
     assert condition_number(switched_wave_plate_psg()) > np.sqrt(3)
 
 
 def test_ideal_switched_psg_states():
     W = switched_wave_plate_psg()
-    np.testing.assert_allclose(W[:, 0], [1, 1, 0, 0], atol=1e-15)   # H
+    np.testing.assert_allclose(W[:, 0], [1, 1, 0, 0], atol=1e-15)  # H
     np.testing.assert_allclose(W[:, 1], [1, -1, 0, 0], atol=1e-15)  # V (HWP at 45 deg)
-    np.testing.assert_allclose(W[:, 2], [1, 0, 1, 0], atol=1e-15)   # +45 (HWP at 22.5 deg)
-    assert abs(W[3, 3]) == pytest.approx(1) and dop(W[:, 3]) == pytest.approx(1)  # circular (QWP at 45 deg)
+    np.testing.assert_allclose(W[:, 2], [1, 0, 1, 0], atol=1e-15)  # +45 (HWP at 22.5 deg)
+    assert abs(W[3, 3]) == pytest.approx(1) and dop(W[:, 3]) == pytest.approx(
+        1
+    )  # circular (QWP at 45 deg)
 
 
 def test_measurement_model_and_noise_statistics():
@@ -31,7 +42,7 @@ def test_measurement_model_and_noise_statistics():
     B = inst.intensities(M)
     mean, std = inst.measure(M, rng, noise=0.01, repeats=4000, relative_to="max")
     sigma = 0.01 * np.abs(B).max()
-    np.testing.assert_allclose(std, sigma, rtol=0.06)   # 4000 draws: std of the std is ~1.1 %
+    np.testing.assert_allclose(std, sigma, rtol=0.06)  # 4000 draws: std of the std is ~1.1 %
     assert np.all(np.abs(mean - B) < 5 * sigma / np.sqrt(4000))
     mean, std = inst.measure(M, rng, noise=0.01, repeats=4000)  # relative to each reading
     np.testing.assert_allclose(std, 0.01 * np.abs(B), rtol=0.06)

@@ -1,0 +1,51 @@
+"""Readers and writers of measured data, each validating what it reads.
+
+Bad input raises ValueError naming the file, row and field.
+
+* Mueller-matrix BRDF tables (long CSV, NIST SCATMECH style): :func:`read_mueller_brdf`,
+  :func:`write_mueller_brdf` -> :class:`MuellerBRDF` in the project's geometry (``phi = pi``
+  specular), the input of :func:`scatterlab.ellipsometry.fit_pbrdf`.
+* In-plane ellipsometer data (CSV): :func:`read_ellipsometry`, :func:`write_ellipsometry` ->
+  :class:`EllipsometryData`, the input of :func:`scatterlab.ellipsometry.fit_mueller_elements`.
+* Polarimetric image datasets (channel images at several specular geometries):
+  :class:`PolarimetricDataset` in HDF5, NPZ, or TIFF with a sidecar TOML (:func:`read_dataset` /
+  :func:`write_dataset` and one pair per format); division-of-focal-plane raw frames are demosaiced
+  on reading (:func:`demosaic`).
+* Example files of every format: ``python -m scatterlab.io.examples OUT`` (simulated, labelled so).
+"""
+
+from scatterlab.io.dataset import Optics, PolarimetricDataset, Truth, read_dataset, write_dataset
+from scatterlab.io.dofp import SONY_POLARSENS, demosaic, mosaic
+from scatterlab.io.ellipsometry import EllipsometryData, read_ellipsometry, write_ellipsometry
+from scatterlab.io.mueller_brdf import MuellerBRDF, read_mueller_brdf, write_mueller_brdf
+from scatterlab.io.stacks import (
+    read_dataset_hdf5,
+    read_dataset_npz,
+    read_dataset_tiff,
+    write_dataset_hdf5,
+    write_dataset_npz,
+    write_dataset_tiff,
+)
+
+__all__ = [
+    "MuellerBRDF",
+    "read_mueller_brdf",
+    "write_mueller_brdf",
+    "EllipsometryData",
+    "read_ellipsometry",
+    "write_ellipsometry",
+    "PolarimetricDataset",
+    "Optics",
+    "Truth",
+    "read_dataset",
+    "write_dataset",
+    "read_dataset_hdf5",
+    "write_dataset_hdf5",
+    "read_dataset_npz",
+    "write_dataset_npz",
+    "read_dataset_tiff",
+    "write_dataset_tiff",
+    "demosaic",
+    "mosaic",
+    "SONY_POLARSENS",
+]

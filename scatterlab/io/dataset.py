@@ -1,0 +1,487 @@
+r"""Polarimetric image datasets: channel images of one scene at several specular geometries.
+
+:class:`PolarimetricDataset` is what ``scatterlab analyze`` and the characterization pipeline take
+from measured (or simulated) data:
+
+* ``counts`` (G, K, H, W) [e-]: channel images of G geometries and K polarizer channels, in
+  dark-subtracted photo-electrons (divide ADU by the gain first; small negative values from read
+  noise are fine);
+* ``polarizer_angles`` (K,) [rad]: analyser angle of each channel from the s axis;
+* ``theta`` (G,) [rad]: specular geometry of each acquisition, theta_i = theta_r and phi = pi
+  (observation in the specular plane);
+* ``wavelength`` [m];
+* ``optics`` (:class:`Optics`): sampling of the PSF, pixels per lambda/D, or the aperture diameter,
+  pixel pitch and focal length;
+* ``read_noise`` [e- rms] or None when unknown;
+* ``truth`` (:class:`Truth`) or None: what a simulation knows (labels, indices, roughness, the
+  object's S0 and DOLP, the PSFs); None for measurements;
+* ``title``, ``description`` (str) and ``simulated`` (bool, True for simulated data, always said so
+  in reports).
+
+The PSF sampling ``Q`` (pixels per lambda/D; 2 is Nyquist) fixes the support of the optical transfer
+function: the pupil's radius in the Fourier grid of an ``n``-pixel image is ``n / (2 Q)`` pixels
+(:meth:`Optics.pupil_radius`), the ``psf_radius`` of
+:func:`scatterlab.deconvolution.blind_deconvolve`.
+
+Files (all hold the same keys; degrees and micrometres in files, radians and metres in memory):
+
+* HDF5 (:func:`write_dataset_hdf5`, :func:`read_dataset_hdf5`) and NPZ (:func:`write_dataset_npz`,
+  :func:`read_dataset_npz`);
+* a multi-page TIFF with a sidecar TOML of the same name (:func:`write_dataset_tiff`,
+  :func:`read_dataset_tiff`), the form most cameras give;
+* any of them may hold DoFP raw frames ``raw`` (G, 2H, 2W) with ``dofp_pattern_deg`` instead of
+  ``counts`` and ``polarizer_deg``: they are demosaiced on reading (:mod:`scatterlab.io.dofp`).
+
+:func:`read_dataset` picks the reader from the file name. Keys: ``counts`` or ``raw``;
+``polarizer_deg`` (K,); ``dofp_pattern_deg`` (2, 2); ``theta_deg`` (G,); ``wavelength_um``;
+``pixels_per_lambda_over_d``, ``aperture_diameter_mm``, ``pixel_pitch_um``, ``focal_length_mm``
+(optics; give the first or the other three); ``read_noise_e``; ``title``; ``description``;
+``simulated``; ``truth_labels`` (H, W), ``truth_names`` (L,), ``truth_n``, ``truth_kappa``,
+``truth_sigma`` (L,), ``truth_s0``, ``truth_dolp``, ``truth_psf`` (G, H, W).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from scatterlab.io.dofp import check_pattern, demosaic, mosaic
+
+__all__ = [
+    "Optics",
+    "Truth",
+    "PolarimetricDataset",
+    "to_flat",
+    "from_flat",
+    "read_dataset",
+    "write_dataset",
+    "DATASET_SUFFIXES",
+    "FORMAT_NAME",
+]
+
+FORMAT_NAME = "scatterlab polarimetric dataset"
+FORMAT_VERSION = 1
+DATASET_SUFFIXES = (".h5", ".hdf5", ".npz", ".tif", ".tiff", ".toml")
+_OPTICS_KEYS = {
+    "pixels_per_lambda_over_d": 1.0,
+    "aperture_diameter_mm": 1e-3,
+    "pixel_pitch_um": 1e-6,
+    "focal_length_mm": 1e-3,
+}
+
+
+@dataclass(frozen=True)
+class Optics:
+    """Imaging optics: give ``pixels_per_lambda_over_d`` or all of ``aperture_diameter``,
+    ``pixel_pitch`` and ``focal_length`` [m] (then
+    ``Q = wavelength * focal_length / (aperture_diameter * pixel_pitch)``)."""
+
+    pixels_per_lambda_over_d: float | None = None
+    aperture_diameter: float | None = None
+    pixel_pitch: float | None = None
+    focal_length: float | None = None
+
+    def __post_init__(self):
+        for name in (
+            "pixels_per_lambda_over_d",
+            "aperture_diameter",
+            "pixel_pitch",
+            "focal_length",
+        ):
+            v = getattr(self, name)
+            if v is not None and not (np.isfinite(v) and v > 0):
+                raise ValueError(f"optics {name} must be > 0, got {v}")
+        physical = (self.aperture_diameter, self.pixel_pitch, self.focal_length)
+        if self.pixels_per_lambda_over_d is None and any(v is None for v in physical):
+            raise ValueError(
+                "optics need pixels_per_lambda_over_d, or aperture_diameter, pixel_pitch and "
+                "focal_length together"
+            )
+
+    def sampling(self, wavelength: float) -> float:
+        """Pixels per lambda/D (2 is Nyquist sampling of the PSF).
+
+        Parameters
+        ----------
+        wavelength : float [m]
+
+        Returns
+        -------
+        float
+        """
+        if self.pixels_per_lambda_over_d is not None:
+            return float(self.pixels_per_lambda_over_d)
+        return float(wavelength * self.focal_length / (self.aperture_diameter * self.pixel_pitch))
+
+    def pupil_radius(self, n: int, wavelength: float) -> float:
+        """Radius of the pupil (half the OTF support) in the Fourier grid of an image.
+
+        Parameters
+        ----------
+        n : int
+            Image size [pixels].
+        wavelength : float [m]
+
+        Returns
+        -------
+        float
+            ``n / (2 Q)`` [pixels], the ``psf_radius`` of the blind deconvolution.
+        """
+        return n / (2 * self.sampling(wavelength))
+
+
+@dataclass
+class Truth:
+    """What a simulation knows, in object coordinates (the plate as seen face-on; the camera sees it
+    foreshortened by cos theta).
+
+    Attributes
+    ----------
+    labels : ndarray (H, W) int
+        Material label of each pixel, indexing ``names``, ``n``, ``kappa``, ``sigma``.
+    names : list of str
+    n, kappa, sigma : ndarray (L,)
+        Complex index ``n - 1j*kappa`` and rms facet slope per label.
+    s0, dolp : ndarray (G, H, W) or None
+        The object's S0 [1/sr] and DOLP at each geometry.
+    psf : ndarray (G, H, W) or None
+        The PSF each acquisition was blurred with (centred, unit sum).
+    """
+
+    labels: np.ndarray
+    names: list
+    n: np.ndarray
+    kappa: np.ndarray
+    sigma: np.ndarray
+    s0: np.ndarray | None = None
+    dolp: np.ndarray | None = None
+    psf: np.ndarray | None = None
+
+
+@dataclass
+class PolarimetricDataset:
+    """Channel images at several specular geometries (module docstring for the shapes and units)."""
+
+    counts: np.ndarray
+    polarizer_angles: np.ndarray
+    theta: np.ndarray
+    wavelength: float
+    optics: Optics
+    read_noise: float | None = None
+    truth: Truth | None = None
+    title: str = ""
+    description: str = ""
+    simulated: bool = False
+    source: str = ""
+    notes: list = field(default_factory=list)
+
+    def __post_init__(self):
+        flat = to_flat(self)
+        checked = from_flat(flat, self.source or "dataset")
+        self.counts, self.polarizer_angles, self.theta = (
+            checked.counts,
+            checked.polarizer_angles,
+            checked.theta,
+        )
+        self.wavelength = checked.wavelength
+
+    @property
+    def shape(self) -> tuple:
+        """``(G, K, H, W)``."""
+        return self.counts.shape
+
+    def stokes(self) -> np.ndarray:
+        """Least-squares linear Stokes images of the (blurred, noisy) data (G, 3, H, W) [e-]."""
+        from scatterlab.imaging import stokes_from_channels
+
+        return np.stack([stokes_from_channels(c, self.polarizer_angles) for c in self.counts])
+
+
+# ------------------------------------------------------------------------------------------- flat
+# form
+def to_flat(ds: PolarimetricDataset, *, dofp_pattern=None) -> dict:
+    """The dataset as the flat dict of file keys (module docstring).
+
+    Parameters
+    ----------
+    ds : PolarimetricDataset
+    dofp_pattern : array_like (2, 2) [deg], optional
+        Store DoFP raw frames (the four channels mosaicked) instead of channel images.
+
+    Returns
+    -------
+    dict
+        Arrays, numbers and strings keyed as in files (degrees, micrometres).
+    """
+    flat = {
+        "format": FORMAT_NAME,
+        "format_version": FORMAT_VERSION,
+        "title": ds.title,
+        "description": ds.description,
+        "simulated": bool(ds.simulated),
+        "theta_deg": np.degrees(np.asarray(ds.theta, float)),
+        "wavelength_um": float(ds.wavelength) * 1e6,
+    }
+    if dofp_pattern is not None:
+        flat["raw"] = mosaic(ds.counts, ds.polarizer_angles, dofp_pattern)
+        flat["dofp_pattern_deg"] = check_pattern(dofp_pattern, "dofp_pattern")
+    else:
+        flat["counts"] = np.asarray(ds.counts, float)
+        flat["polarizer_deg"] = np.degrees(np.asarray(ds.polarizer_angles, float))
+    o = ds.optics
+    for key, value in (
+        ("pixels_per_lambda_over_d", o.pixels_per_lambda_over_d),
+        ("aperture_diameter_mm", o.aperture_diameter),
+        ("pixel_pitch_um", o.pixel_pitch),
+        ("focal_length_mm", o.focal_length),
+    ):
+        if value is not None:
+            flat[key] = float(value) / _OPTICS_KEYS[key]
+    if ds.read_noise is not None:
+        flat["read_noise_e"] = float(ds.read_noise)
+    t = ds.truth
+    if t is not None:
+        flat.update(
+            truth_labels=np.asarray(t.labels),
+            truth_names=np.asarray(list(t.names), dtype=str),
+            truth_n=np.asarray(t.n, float),
+            truth_kappa=np.asarray(t.kappa, float),
+            truth_sigma=np.asarray(t.sigma, float),
+        )
+        for name in ("s0", "dolp", "psf"):
+            if getattr(t, name) is not None:
+                flat[f"truth_{name}"] = np.asarray(getattr(t, name), float)
+    return flat
+
+
+def _array(flat, key, where, ndim):
+    if key not in flat:
+        raise ValueError(f"{where}: missing {key!r}")
+    try:
+        a = np.asarray(flat[key], float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{where}: {key!r} must be numeric") from None
+    if a.ndim != ndim:
+        raise ValueError(f"{where}: {key!r} must have {ndim} dimensions, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{where}: {key!r} contains NaN or inf")
+    return a
+
+
+def _scalar(flat, key, where, required=True):
+    if key not in flat or flat[key] is None:
+        if required:
+            raise ValueError(f"{where}: missing {key!r}")
+        return None
+    try:
+        v = float(np.asarray(flat[key]).reshape(()))
+    except (TypeError, ValueError):
+        raise ValueError(f"{where}: {key!r} must be one number, got {flat[key]!r}") from None
+    if not (np.isfinite(v) and v > 0):
+        raise ValueError(f"{where}: {key!r} must be > 0, got {v}")
+    return v
+
+
+def _channels(flat, where):
+    """``(counts (G, K, H, W), angles [rad], notes)`` from channel images or DoFP raw frames."""
+    if "raw" in flat and "counts" in flat:
+        raise ValueError(f"{where}: holds both 'counts' and 'raw'; keep one")
+    if "raw" in flat:
+        raw = _array(flat, "raw", where, 3)
+        if "dofp_pattern_deg" not in flat:
+            raise ValueError(
+                f"{where}: DoFP raw frames need 'dofp_pattern_deg' (2x2 polarizer angles)"
+            )
+        counts, angles = demosaic(
+            raw,
+            check_pattern(flat["dofp_pattern_deg"], f"{where}: 'dofp_pattern_deg'"),
+            where=where,
+        )
+        return (
+            counts,
+            angles,
+            [f"DoFP raw frames {raw.shape[1:]} demosaiced by superpixel into 4 channels"],
+        )
+    counts = _array(flat, "counts", where, 4)
+    deg = _array(flat, "polarizer_deg", where, 1)
+    if deg.size != counts.shape[1]:
+        raise ValueError(
+            f"{where}: 'polarizer_deg' has {deg.size} angles for {counts.shape[1]} channels"
+        )
+    if np.unique(np.round(np.mod(deg, 180), 9)).size < 3:
+        raise ValueError(
+            f"{where}: 'polarizer_deg' {deg.tolist()} needs at least three different orientations "
+            f"(mod 180 deg) to measure linear polarization"
+        )
+    return counts, np.radians(deg), []
+
+
+def _truth(flat, counts_shape, where):
+    if "truth_labels" not in flat:
+        return None
+    G, _, H, W = counts_shape
+    labels = np.asarray(flat["truth_labels"])
+    names = [str(x) for x in np.asarray(flat.get("truth_names", [])).ravel()]
+    props = [_array(flat, f"truth_{k}", where, 1) for k in ("n", "kappa", "sigma")]
+    L = len(names)
+    if labels.shape != (H, W) or not np.issubdtype(labels.dtype, np.integer):
+        raise ValueError(
+            f"{where}: 'truth_labels' must be an integer map of shape {(H, W)}, got "
+            f"{labels.dtype} {labels.shape}"
+        )
+    if any(p.size != L for p in props) or labels.min() < 0 or labels.max() >= L:
+        raise ValueError(
+            f"{where}: truth_names, truth_n, truth_kappa, truth_sigma need one entry per label "
+            f"(labels 0..{labels.max()})"
+        )
+    maps = {}
+    for k in ("s0", "dolp", "psf"):
+        if f"truth_{k}" in flat:
+            maps[k] = _array(flat, f"truth_{k}", where, 3)
+            if maps[k].shape != (G, H, W):
+                raise ValueError(
+                    f"{where}: 'truth_{k}' must have shape {(G, H, W)}, got {maps[k].shape}"
+                )
+    return Truth(labels.astype(int), names, *props, **maps)
+
+
+def from_flat(flat: dict, where: str) -> PolarimetricDataset:
+    """Validate the flat dict of file keys and build the dataset.
+
+    Parameters
+    ----------
+    flat : dict
+        Keys of the module docstring (``counts`` or ``raw``, ``theta_deg``, ...).
+    where : str
+        The file, named in every error.
+
+    Returns
+    -------
+    PolarimetricDataset
+
+    Raises
+    ------
+    ValueError
+        A missing key, a wrong shape, NaN, angles or wavelength out of range, too few polarizer
+        orientations, bad optics or truth, naming ``where`` and the key.
+    """
+    counts, angles, notes = _channels(flat, where)
+    G = counts.shape[0]
+    theta_deg = _array(flat, "theta_deg", where, 1)
+    if theta_deg.size != G:
+        raise ValueError(f"{where}: 'theta_deg' has {theta_deg.size} angles for {G} geometries")
+    if np.any(theta_deg <= 0) or np.any(theta_deg >= 90):
+        raise ValueError(f"{where}: 'theta_deg' must be in (0, 90) deg, got {theta_deg.tolist()}")
+    wavelength = _scalar(flat, "wavelength_um", where) * 1e-6
+    if not 0.01 <= wavelength * 1e6 <= 100:
+        raise ValueError(
+            f"{where}: 'wavelength_um' = {wavelength * 1e6:g} is outside [0.01, 100] um"
+        )
+    kw = {
+        k.replace("_mm", "").replace("_um", ""): None if v is None else v * _OPTICS_KEYS[k]
+        for k in _OPTICS_KEYS
+        for v in [_scalar(flat, k, where, required=False)]
+    }
+    try:
+        optics = Optics(**kw)
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}") from None
+    read_noise = flat.get("read_noise_e")
+    if read_noise is not None and not (np.isfinite(float(read_noise)) and float(read_noise) >= 0):
+        raise ValueError(f"{where}: 'read_noise_e' must be >= 0, got {read_noise}")
+    ds = object.__new__(PolarimetricDataset)  # validated here: skip __post_init__'s round trip
+    ds.__dict__.update(
+        counts=counts,
+        polarizer_angles=angles,
+        theta=np.radians(theta_deg),
+        wavelength=wavelength,
+        optics=optics,
+        read_noise=None if read_noise is None else float(read_noise),
+        truth=_truth(flat, counts.shape, where),
+        title=str(flat.get("title", "")),
+        description=str(flat.get("description", "")),
+        simulated=_bool(flat.get("simulated", False)),
+        source=str(where),
+        notes=notes,
+    )
+    return ds
+
+
+def _bool(v) -> bool:
+    v = np.asarray(v).reshape(()).item()
+    return v.lower() == "true" if isinstance(v, str) else bool(v)
+
+
+# -------------------------------------------------------------------------------------------
+# dispatch
+def read_dataset(path) -> PolarimetricDataset:
+    """Read a dataset, choosing the reader from the file name.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.h5``/``.hdf5``, ``.npz``, ``.tif``/``.tiff`` (with its sidecar ``.toml``) or the sidecar
+        ``.toml``.
+
+    Returns
+    -------
+    PolarimetricDataset
+
+    Raises
+    ------
+    ValueError
+        "expected a dataset" for other kinds of file; the readers' errors, naming the file and key.
+    FileNotFoundError
+        A missing file.
+    """
+    from scatterlab.io import stacks
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in DATASET_SUFFIXES:
+        raise ValueError(
+            f"{path}: expected a dataset (HDF5 .h5, NPZ .npz, or a TIFF stack with a sidecar "
+            f".toml), got a {suffix or 'suffix-less'} file"
+        )
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such file")
+    if suffix in (".h5", ".hdf5"):
+        return stacks.read_dataset_hdf5(path)
+    if suffix == ".npz":
+        return stacks.read_dataset_npz(path)
+    return stacks.read_dataset_tiff(path)
+
+
+def write_dataset(
+    path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
+) -> Path:
+    """Write ``ds`` in the format named by the file's suffix.
+
+    Parameters
+    ----------
+    path : str or Path
+        Ending in ``.h5``/``.hdf5``, ``.npz`` or ``.tif``/``.tiff``.
+    ds : PolarimetricDataset
+    dofp_pattern : array_like (2, 2) [deg], optional
+        Store DoFP raw frames instead of channel images.
+    overwrite : bool
+
+    Returns
+    -------
+    Path
+    """
+    from scatterlab.io import stacks
+
+    suffix = Path(path).suffix.lower()
+    writers = {
+        ".h5": stacks.write_dataset_hdf5,
+        ".hdf5": stacks.write_dataset_hdf5,
+        ".npz": stacks.write_dataset_npz,
+        ".tif": stacks.write_dataset_tiff,
+        ".tiff": stacks.write_dataset_tiff,
+    }
+    if suffix not in writers:
+        raise ValueError(f"{path}: dataset files end in {sorted(writers)}")
+    return writers[suffix](path, ds, dofp_pattern=dofp_pattern, overwrite=overwrite)

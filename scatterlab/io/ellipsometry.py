@@ -1,0 +1,269 @@
+r"""In-plane Mueller ellipsometer data: normalised elements against the specular angle (CSV).
+
+One row per angle ``theta = theta_i = theta_r`` (observation in the specular plane, ``phi = pi``),
+with the four normalised elements that :func:`scatterlab.ellipsometry.fit_mueller_elements` fits,
+``(M01, M11, M22, M23) / M00`` (0-based; ``m12, m22, m33, m34`` in the 1-based names of the
+literature) and, optionally, their standard deviations::
+
+    # simulated: ...
+    theta,m12,m22,m33,m34,std_m12,std_m22,std_m33,std_m34
+    10,-0.0021,1.0,0.9989,-0.0463,0.002,0.002,0.002,0.002
+
+Angles in degrees unless ``angle_unit="rad"``; an optional ``lambda`` column (one wavelength per
+file, micrometres unless ``wavelength_unit``). The element names follow :mod:`scatterlab.io.table`
+(``m12/m11`` and 0-based ``m01`` ... are recognised too); a file that also holds the first element
+``m11`` is normalised by it. The time convention is an option as for Mueller BRDF tables:
+``"exp(-iwt)"`` files have the sign of ``M23`` flipped on reading (default ``"exp(+jwt)"``, the
+project's).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from scatterlab.io.table import (
+    angle_factor,
+    element_columns,
+    element_name,
+    format_table,
+    length_factor,
+    read_table,
+    time_convention_flip,
+)
+
+__all__ = ["EllipsometryData", "read_ellipsometry", "write_ellipsometry", "IN_PLANE_ELEMENTS"]
+
+IN_PLANE_ELEMENTS = (
+    (0, 1),
+    (1, 1),
+    (2, 2),
+    (2, 3),
+)  # the order of scatterlab.ellipsometry.fit.ELEMENTS
+_ANGLE = {"theta", "thetai", "aoi", "angle", "theta0", "incidence"}
+_WAVELENGTH = {"lambda", "wavelength", "wl", "lam"}
+
+
+@dataclass
+class EllipsometryData:
+    """In-plane ellipsometry at N specular angles.
+
+    Attributes
+    ----------
+    theta : ndarray (N,) [rad] in ``[0, pi/2]``, ``theta_i = theta_r``.
+    elements : ndarray (N, 4)
+        ``(M01, M11, M22, M23) / M00``, each in [-1, 1] up to noise.
+    std : ndarray (N, 4) or None
+        Standard deviations of ``elements``.
+    wavelength : float or None [m]
+    source : str
+    notes : list of str
+    """
+
+    theta: np.ndarray
+    elements: np.ndarray
+    std: np.ndarray | None = None
+    wavelength: float | None = None
+    source: str = ""
+    notes: list = field(default_factory=list)
+
+    def __post_init__(self):
+        self.theta = np.asarray(self.theta, float).ravel()
+        self.elements = np.asarray(self.elements, float)
+        if self.elements.shape != (self.theta.size, 4):
+            raise ValueError(
+                f"elements must have shape ({self.theta.size}, 4), got {self.elements.shape}"
+            )
+        if not (np.all(np.isfinite(self.theta)) and np.all(np.isfinite(self.elements))):
+            raise ValueError("theta and elements must be finite")
+        if np.any(self.theta < 0) or np.any(self.theta > np.pi / 2):
+            raise ValueError("theta must be in [0, pi/2] rad")
+        if self.std is not None:
+            self.std = np.asarray(self.std, float)
+            if (
+                self.std.shape != self.elements.shape
+                or not np.all(np.isfinite(self.std))
+                or np.any(self.std < 0)
+            ):
+                raise ValueError(f"std must be finite, >= 0 and of shape {self.elements.shape}")
+        if self.wavelength is not None and not float(self.wavelength) > 0:
+            raise ValueError(f"wavelength must be > 0 [m], got {self.wavelength}")
+
+
+def read_ellipsometry(
+    path,
+    columns=None,
+    *,
+    angle_unit: str = "deg",
+    wavelength_unit: str = "um",
+    time_convention: str = "exp(+jwt)",
+    tolerance: float = 0.1,
+) -> EllipsometryData:
+    """Read in-plane ellipsometer data (module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+    columns : dict, optional
+        ``{"theta": NAME, "wavelength": NAME}`` for unrecognised angle or wavelength column names.
+    angle_unit : {"deg", "rad"}
+    wavelength_unit : {"um", "nm", "mm", "m"}
+    time_convention : {"exp(+jwt)", "exp(-iwt)"}
+        ``"exp(-iwt)"`` flips the sign of M23 (the project's convention is ``exp(+jwt)``).
+    tolerance : float
+        Normalised elements may exceed 1 in magnitude by this much (noise) before the file is
+        refused.
+
+    Returns
+    -------
+    EllipsometryData
+        ``theta`` [rad], ``elements`` (N, 4), ``std`` (N, 4) or None, ``wavelength`` [m] or None.
+
+    Raises
+    ------
+    ValueError
+        Naming the file, line and column: missing angle or element columns, non-numeric or
+        non-finite cells, angles outside [0, 90] deg, elements outside [-1 - tolerance, 1 +
+        tolerance], negative standard deviations, several wavelengths in one file.
+    """
+    flip = time_convention_flip(time_convention)
+    table = read_table(path)
+    ai = table.find(_ANGLE, "theta", columns=columns)
+    fa = angle_factor(angle_unit)
+    table.check_unit(ai, "deg" if fa != 1.0 else "rad", table.names[ai], "angle_unit")
+    theta = table.values[:, ai] * fa
+    bad = (theta < 0) | (theta > np.pi / 2 + 1e-12)
+    if bad.any():
+        row = int(np.argmax(bad))
+        raise ValueError(
+            f"{table.where(row)}, column {table.names[ai]!r}: angle {table.values[row, ai]} "
+            f"{angle_unit} is outside [0, 90] deg"
+        )
+    wavelength = _wavelength(table, columns, wavelength_unit)
+    E, S = _elements(table, theta.size, tolerance)
+    notes = []
+    if flip:
+        E[:, 3] = -E[:, 3]
+        notes.append(f"time convention {time_convention}: M23 sign-flipped to exp(+jwt)")
+    return EllipsometryData(theta, E, S, wavelength, str(path), notes)
+
+
+def _elements(table, n, tolerance):
+    """In-plane elements (n, 4), normalised, and their standard deviations (or None)."""
+    values, stds = element_columns(table, default_base=1)
+    missing = [element_name(j, k) for j, k in IN_PLANE_ELEMENTS if (j, k) not in values]
+    if missing:
+        raise ValueError(
+            f"{table.path}: missing element columns {missing} (in-plane data: m12, m22, m33, m34)"
+        )
+    first = values.get((0, 0))
+    scale = table.values[:, first[0]] if first is not None and not first[1] else np.ones(n)
+    if np.any(scale <= 0):
+        row = int(np.argmax(scale <= 0))
+        raise ValueError(f"{table.where(row)}: m11 = {scale[row]} must be > 0 to normalise by it")
+
+    def stack(cols):
+        return np.stack(
+            [
+                table.values[:, cols[jk][0]] / (1.0 if cols[jk][1] else scale)
+                for jk in IN_PLANE_ELEMENTS
+            ],
+            1,
+        )
+
+    E, S = stack(values), None
+    if stds:
+        lacking = [element_name(*jk) for jk in IN_PLANE_ELEMENTS if jk not in stds]
+        if lacking:
+            raise ValueError(
+                f"{table.path}: standard deviations given for some elements but not for {lacking}"
+            )
+        S = stack(stds)
+        if np.any(S < 0):
+            row, c = np.argwhere(S < 0)[0]
+            raise ValueError(
+                f"{table.where(row)}, column {table.names[stds[IN_PLANE_ELEMENTS[c]][0]]!r}: "
+                f"standard deviation < 0"
+            )
+    out = np.abs(E) > 1 + tolerance
+    if out.any():
+        row, c = np.argwhere(out)[0]
+        raise ValueError(
+            f"{table.where(row)}, column {table.names[values[IN_PLANE_ELEMENTS[c]][0]]!r}: "
+            f"normalised element {E[row, c]:.6g} is outside [-1, 1] beyond tolerance={tolerance}"
+        )
+    return E, S
+
+
+def _wavelength(table, columns, unit):
+    wi = table.find(_WAVELENGTH, "wavelength", required=False, columns=columns)
+    if wi is None:
+        return None
+    fw = length_factor(unit)
+    table.check_unit(
+        wi, {1.0: "m", 1e-3: "mm", 1e-6: "um", 1e-9: "nm"}[fw], table.names[wi], "wavelength_unit"
+    )
+    w = np.unique(table.values[:, wi])
+    if w.size != 1:
+        raise ValueError(
+            f"{table.path}: several wavelengths {w.tolist()} in one ellipsometry file (one per "
+            "file)"
+        )
+    if not w[0] > 0:
+        raise ValueError(f"{table.path}, column {table.names[wi]!r}: wavelength must be > 0")
+    return float(w[0] * fw)
+
+
+def write_ellipsometry(
+    path,
+    data: EllipsometryData,
+    *,
+    angle_unit: str = "deg",
+    wavelength_unit: str = "um",
+    time_convention: str = "exp(+jwt)",
+    description: str = "",
+    overwrite: bool = False,
+) -> Path:
+    """Write in-plane ellipsometer data as CSV that :func:`read_ellipsometry` reads back exactly.
+
+    Parameters
+    ----------
+    path : str or Path
+    data : EllipsometryData
+    angle_unit, wavelength_unit : str
+        Units of the file (degrees and micrometres by default), stated in its header comments.
+    time_convention : {"exp(+jwt)", "exp(-iwt)"}
+    description : str
+        A comment line (where the data came from; "simulated ..." for simulations).
+    overwrite : bool
+
+    Returns
+    -------
+    Path
+    """
+    from scatterlab.runtime.results import write_text
+
+    fa = angle_factor(angle_unit)
+    E = data.elements.copy()
+    if time_convention_flip(time_convention):
+        E[:, 3] = -E[:, 3]
+    names = ["theta"] + [element_name(j, k) for j, k in IN_PLANE_ELEMENTS]
+    cols = [data.theta / fa, E]
+    if data.std is not None:
+        names += ["std_" + n for n in names[1:5]]
+        cols.append(data.std)
+    if data.wavelength is not None:
+        names.append("lambda")
+        cols.append(np.full((len(data.theta), 1), data.wavelength / length_factor(wavelength_unit)))
+    comments = ([description] if description else []) + [
+        "in-plane Mueller ellipsometry: theta = theta_i = theta_r (specular plane); elements "
+        "normalised by m11 "
+        "(1-based names: m12 = M01/M00, m22 = M11/M00, m33 = M22/M00, m34 = M23/M00)",
+        f"angles in {angle_unit}"
+        + (f", wavelength (lambda) in {wavelength_unit}" if data.wavelength else "")
+        + f"; time convention {time_convention}",
+    ]
+    values = np.column_stack([c if np.ndim(c) == 2 else c[:, None] for c in cols])
+    return write_text(path, format_table(names, values, comments), overwrite=overwrite)

@@ -1,0 +1,351 @@
+"""Polarimetric image stacks on disk: HDF5, NPZ, and TIFF with a sidecar TOML.
+
+The keys are those of :mod:`scatterlab.io.dataset`.
+
+* HDF5: arrays as datasets (gzip-compressed), scalars and strings as attributes of the root group;
+* NPZ: every key an array (strings as 0-d unicode arrays; read with ``allow_pickle=False``);
+* TIFF: the images as pages (``counts``: G*K pages, geometry-major -- geometry 0's channels first;
+  ``raw``: one page per geometry) and a sidecar ``NAME.toml`` holding every other key, ``layout =
+  "channels"`` or ``"dofp"``, and optionally ``tiff`` (the stack's file name, or a list of one file
+  per geometry) and ``truth`` (an NPZ file with the ``truth_*`` arrays). A user's own stack needs
+  only a sidecar such as::
+
+      wavelength_um = 1.55
+      theta_deg = [40, 55]
+      polarizer_deg = [0, 45, 90, 135]
+      pixels_per_lambda_over_d = 2.0
+      layout = "channels"
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from scatterlab.io.dataset import FORMAT_NAME, PolarimetricDataset, from_flat, to_flat
+
+__all__ = [
+    "read_dataset_hdf5",
+    "write_dataset_hdf5",
+    "read_dataset_npz",
+    "write_dataset_npz",
+    "read_dataset_tiff",
+    "write_dataset_tiff",
+]
+
+_IMAGES = ("counts", "raw")
+
+
+def _store(v):
+    """float32 for images (counts carry ~1e-7 relative rounding, far below shot noise), as-is
+    otherwise.
+    """
+    a = np.asarray(v)
+    return a.astype(np.float32) if a.dtype.kind == "f" and a.ndim >= 2 else a
+
+
+def write_dataset_hdf5(
+    path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
+) -> Path:
+    """Write ``ds`` to HDF5 (images gzip-compressed, as float32).
+
+    Parameters
+    ----------
+    path : str or Path
+    ds : PolarimetricDataset
+    dofp_pattern : array_like (2, 2) [deg], optional
+        Store DoFP raw frames with this 2x2 layout (four channels needed) instead of channel images.
+    overwrite : bool
+        Replace existing files (otherwise FileExistsError).
+
+    Returns
+    -------
+    Path
+        The file written (atomically).
+    """
+    import h5py
+
+    from scatterlab.runtime.results import atomic_write_bytes
+
+    buf = io.BytesIO()
+    with h5py.File(buf, "w") as f5:
+        for key, value in to_flat(ds, dofp_pattern=dofp_pattern).items():
+            a = np.asarray(value)
+            if a.ndim == 0:
+                f5.attrs[key] = value
+            elif a.dtype.kind == "U":
+                f5.create_dataset(key, data=a.astype(object), dtype=h5py.string_dtype())
+            else:
+                f5.create_dataset(key, data=_store(a), compression="gzip", shuffle=True)
+    return atomic_write_bytes(path, buf.getvalue(), overwrite=overwrite)
+
+
+def read_dataset_hdf5(path) -> PolarimetricDataset:
+    """Read a dataset from HDF5.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    PolarimetricDataset
+
+    Raises
+    ------
+    ValueError
+        Not an HDF5 file, or a key missing or invalid (named with the file).
+    """
+    import h5py
+
+    try:
+        f5 = h5py.File(path, "r")
+    except OSError as exc:
+        raise ValueError(f"{path}: not an HDF5 file ({exc})") from None
+    with f5:
+        flat = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f5.attrs.items()}
+        for key, item in f5.items():
+            if isinstance(item, h5py.Dataset):
+                data = item[()]
+                flat[key] = (
+                    np.array([x.decode() if isinstance(x, bytes) else x for x in data])
+                    if item.dtype.kind == "O"
+                    else np.asarray(data)
+                )
+    return from_flat(flat, str(path))
+
+
+def write_dataset_npz(
+    path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
+) -> Path:
+    """Write ``ds`` to a compressed NPZ (images as float32).
+
+    Parameters
+    ----------
+    path : str or Path
+    ds : PolarimetricDataset
+    dofp_pattern : array_like (2, 2) [deg], optional
+        Store DoFP raw frames with this 2x2 layout (four channels needed) instead of channel images.
+    overwrite : bool
+        Replace existing files (otherwise FileExistsError).
+
+    Returns
+    -------
+    Path
+        The file written (atomically).
+    """
+    from scatterlab.runtime.results import write_npz
+
+    flat = {k: _store(v) for k, v in to_flat(ds, dofp_pattern=dofp_pattern).items()}
+    return write_npz(path, overwrite=overwrite, **flat)
+
+
+def read_dataset_npz(path) -> PolarimetricDataset:
+    """Read a dataset from NPZ (no pickles).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    PolarimetricDataset
+
+    Raises
+    ------
+    ValueError
+        Not a readable NPZ file, or a key missing or invalid (named with the file).
+    """
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            flat = {k: z[k] for k in z.files}
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{path}: not a readable NPZ dataset ({exc})") from None
+    flat = {k: (v.item() if v.ndim == 0 else v) for k, v in flat.items()}
+    return from_flat(flat, str(path))
+
+
+# ------------------------------------------------------------------------------------------------
+# TIFF
+def _toml_value(v) -> str:
+    if isinstance(v, (bool, np.bool_)):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+    a = np.asarray(v)
+    if a.ndim:
+        return "[" + ", ".join(_toml_value(x) for x in a.tolist()) + "]"
+    return repr(float(a)) if a.dtype.kind == "f" else str(a.item())
+
+
+def write_dataset_tiff(
+    path,
+    ds: PolarimetricDataset,
+    *,
+    dofp_pattern=None,
+    overwrite: bool = False,
+    truth_file: str | None = None,
+) -> Path:
+    """Write the images as a multi-page float32 TIFF, the rest as its sidecar TOML.
+
+    Parameters
+    ----------
+    path : str or Path
+    ds : PolarimetricDataset
+    dofp_pattern : array_like (2, 2) [deg], optional
+        Store DoFP raw frames with this 2x2 layout (four channels needed) instead of channel images.
+    overwrite : bool
+        Replace existing files (otherwise FileExistsError).
+    truth_file : str, optional
+        Name of the truth NPZ beside the TIFF (default ``NAME-truth.npz``), named in the sidecar.
+
+    Returns
+    -------
+    Path
+        The file written (atomically).
+    """
+    import tifffile
+
+    from scatterlab.runtime.results import atomic_write_bytes, write_npz, write_text
+
+    path = Path(path)
+    flat = to_flat(ds, dofp_pattern=dofp_pattern)
+    key = "raw" if "raw" in flat else "counts"
+    pages = np.asarray(flat.pop(key), np.float32)
+    pages = pages.reshape((-1,) + pages.shape[-2:])
+    truth = {k: flat.pop(k) for k in list(flat) if k.startswith("truth_")}
+    lines = [
+        f"# {FORMAT_NAME}: sidecar of {path.name} (pages: "
+        + (
+            "one DoFP raw frame per geometry)"
+            if key == "raw"
+            else "G*K channel images, geometry-major)"
+        ),
+        f'tiff = "{path.name}"',
+        f'layout = "{"dofp" if key == "raw" else "channels"}"',
+    ]
+    if truth:
+        name = truth_file or f"{path.stem}-truth.npz"
+        write_npz(
+            path.parent / name, overwrite=overwrite, **{k: _store(v) for k, v in truth.items()}
+        )
+        lines.append(f'truth = "{name}"')
+    lines += [f"{k} = {_toml_value(v)}" for k, v in flat.items()]
+    buf = io.BytesIO()
+    tifffile.imwrite(buf, pages, photometric="minisblack")
+    atomic_write_bytes(path, buf.getvalue(), overwrite=overwrite)
+    write_text(path.with_suffix(".toml"), "\n".join(lines) + "\n", overwrite=overwrite)
+    return path
+
+
+def _sidecar(path: Path) -> Path:
+    if path.suffix.lower() == ".toml":
+        return path
+    side = path.with_suffix(".toml")
+    if not side.exists():
+        raise ValueError(
+            f"{path}: a TIFF stack needs its sidecar {side.name} (wavelength_um, theta_deg, "
+            f"polarizer_deg, pixels_per_lambda_over_d, layout; see scatterlab.io.stacks)"
+        )
+    return side
+
+
+def _load_pages(side: Path, meta: dict, default: Path) -> np.ndarray:
+    import tifffile
+
+    names = meta.pop("tiff", None)
+    if names is None and not default.exists():
+        scene = {"plates", "geometry_deg", "image_size", "d_over_r0"} & set(meta)
+        raise ValueError(
+            f"{side}: expected a dataset: no TIFF stack {default.name} beside this TOML and no "
+            "'tiff' key"
+            + (
+                " (it looks like a scene description: run it with `scatterlab characterize`)"
+                if scene
+                else ""
+            )
+        )
+    files = (
+        [default]
+        if names is None
+        else [side.parent / n for n in ([names] if isinstance(names, str) else names)]
+    )
+    stacks = []
+    for f in files:
+        if not f.exists():
+            raise ValueError(f"{side}: 'tiff' names {f.name}, which does not exist")
+        try:
+            a = np.asarray(tifffile.imread(f), float)
+        except Exception as exc:  # tifffile raises several kinds for a non-TIFF file
+            raise ValueError(f"{f}: not a readable TIFF ({exc})") from None
+        stacks.append(a.reshape((-1,) + a.shape[-2:]))
+    shapes = {s.shape[1:] for s in stacks}
+    if len(shapes) != 1:
+        raise ValueError(f"{side}: the TIFF files have different image sizes {sorted(shapes)}")
+    return np.concatenate(stacks)
+
+
+def read_dataset_tiff(path) -> PolarimetricDataset:
+    """Read a TIFF stack and its sidecar TOML.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TIFF (its sidecar is ``path.with_suffix(".toml")``) or the sidecar itself.
+
+    Returns
+    -------
+    PolarimetricDataset
+
+    Raises
+    ------
+    ValueError
+        No sidecar, invalid TOML, an unknown layout, missing TIFF files, a page count that does not
+        match the geometries and channels, or an invalid key (named with the file).
+    """
+    import tomllib
+
+    path = Path(path)
+    side = _sidecar(path)
+    try:
+        meta = tomllib.loads(side.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{side}: not a valid TOML sidecar ({exc})") from None
+    layout = meta.pop("layout", "channels")
+    if layout not in ("channels", "dofp"):
+        raise ValueError(f"{side}: layout must be 'channels' or 'dofp', got {layout!r}")
+    default = (
+        path
+        if path.suffix.lower() != ".toml"
+        else next(
+            (p for p in (side.with_suffix(".tif"), side.with_suffix(".tiff")) if p.exists()),
+            side.with_suffix(".tif"),
+        )
+    )
+    pages = _load_pages(side, meta, default)
+    truth = meta.pop("truth", None)
+    if truth is not None:
+        try:
+            with np.load(side.parent / truth, allow_pickle=False) as z:
+                meta.update({k: z[k] for k in z.files})
+        except (OSError, ValueError) as exc:
+            raise ValueError(
+                f"{side}: truth file {truth!r} is not a readable NPZ ({exc})"
+            ) from None
+    G = len(np.atleast_1d(meta.get("theta_deg", [])))
+    if layout == "dofp":
+        if pages.shape[0] != G:
+            raise ValueError(f"{side}: {pages.shape[0]} DoFP frames for {G} geometries (theta_deg)")
+        meta["raw"] = pages
+    else:
+        K = len(np.atleast_1d(meta.get("polarizer_deg", [])))
+        if G == 0 or K == 0 or pages.shape[0] != G * K:
+            raise ValueError(
+                f"{side}: {pages.shape[0]} TIFF pages for {G} geometries (theta_deg) x {K} "
+                "channels "
+                f"(polarizer_deg): need G*K pages, geometry-major"
+            )
+        meta["counts"] = pages.reshape((G, K) + pages.shape[1:])
+    return from_flat(meta, str(side))

@@ -1,0 +1,352 @@
+"""Delimited text tables (CSV) shared by the readers: parsing, columns, units, element names.
+
+A table is a header line of column names followed by one row of numbers per line. Lines starting
+with ``#`` are comments (writers put the units and conventions there); blank lines are skipped. The
+delimiter is a comma, a tab, a semicolon or white space, whichever the header uses. Every error
+names the file, and the row (line number in the file) and column where there is one.
+
+Column names are matched case-insensitively, ignoring spaces and underscores (``theta_i`` = ``Theta
+I`` = ``thetai``). A unit in brackets or after the last underscore (``lambda [nm]``,
+``wavelength_nm``, ``theta_deg``) is read and must agree with the unit the caller asked for.
+
+Mueller element names: ``m11`` ... ``m44`` or ``f_r11`` ... ``f_r44`` (1-based, the Mueller-matrix
+literature and NIST SCATMECH), or 0-based ``m00`` ... ``m33`` (told apart by the digits used: a 0
+means 0-based, a 4 1-based); an element divided by the first one (``f_r12/f_r11``, ``m12/m11``) is
+normalised. A standard deviation is the element name with a prefix ``std``, ``sd``, ``err``, ``u``
+or a suffix ``std``, ``sd``, ``err`` (``std_m12``, ``m12_err``; normalised: ``std_m12/m11``).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "Table",
+    "read_table",
+    "format_table",
+    "ANGLE_UNITS",
+    "LENGTH_UNITS",
+    "angle_factor",
+    "length_factor",
+    "parse_element",
+    "element_name",
+    "element_columns",
+    "TIME_CONVENTIONS",
+    "time_convention_flip",
+]
+
+ANGLE_UNITS = {"deg": np.pi / 180, "rad": 1.0}
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "nm": 1e-9}
+_UNIT_ALIASES = {
+    "degree": "deg",
+    "degrees": "deg",
+    "radian": "rad",
+    "radians": "rad",
+    "micron": "um",
+    "microns": "um",
+    "µm": "um",
+    "μm": "um",
+    "micrometre": "um",
+    "micrometer": "um",
+    "nanometre": "nm",
+    "nanometer": "nm",
+}
+# time dependence of the file's Jones calculus -> whether its circular elements need a sign flip
+# (the letter, i or j, is only notation: exp(+iwt) is exp(+jwt))
+TIME_CONVENTIONS = {"exp(+jwt)": False, "exp(-jwt)": True, "exp(-iwt)": True, "exp(+iwt)": False}
+
+
+def _unit(name: str, allowed: dict, what: str) -> str:
+    u = _UNIT_ALIASES.get(str(name).strip().lower(), str(name).strip().lower())
+    if u not in allowed:
+        raise ValueError(f"{what} must be one of {sorted(allowed)}, got {name!r}")
+    return u
+
+
+def angle_factor(unit: str, what: str = "angle_unit") -> float:
+    """Radians per ``unit`` (``"deg"`` or ``"rad"``)."""
+    return ANGLE_UNITS[_unit(unit, ANGLE_UNITS, what)]
+
+
+def length_factor(unit: str, what: str = "wavelength_unit") -> float:
+    """Metres per ``unit`` (``"m"``, ``"mm"``, ``"um"``, ``"nm"``)."""
+    return LENGTH_UNITS[_unit(unit, LENGTH_UNITS, what)]
+
+
+def time_convention_flip(convention: str) -> bool:
+    """True when a file in ``convention`` has the circular elements (4th row and column except m33 =
+    M_33) of the opposite sign to the project's ``exp(+jwt)`` convention.
+
+    ``"exp(+jwt)"`` (= ``"exp(+iwt)"``, engineering and ellipsometry, the reference text) needs no
+    change; ``"exp(-iwt)"`` (= ``"exp(-jwt)"``, physics, NIST SCATMECH) conjugates every Jones
+    matrix, which flips the sign of S3 and so of the circular elements.
+    """
+    key = str(convention).replace(" ", "").replace("omega", "w").replace("ω", "w").lower()
+    if key not in TIME_CONVENTIONS:
+        raise ValueError(
+            f"time_convention must be one of {sorted(TIME_CONVENTIONS)}, got {convention!r}"
+        )
+    return TIME_CONVENTIONS[key]
+
+
+def circular_sign() -> np.ndarray:
+    """``(4, 4)`` signs that flip the circular elements: ``C M C``, ``C = diag(1, 1, 1, -1)``."""
+    c = np.array([1.0, 1, 1, -1])
+    return np.outer(c, c)
+
+
+def normalise_name(name: str) -> tuple[str, str | None]:
+    """``(key, unit)``: lower case without spaces and underscores, and a unit given in brackets or
+    as the last underscore-separated word (``"lambda [nm]"`` -> ``("lambda", "nm")``,
+    ``"theta_i_deg"`` -> ``("thetai", "deg")``)."""
+    s = name.strip().lower()
+    unit = None
+    m = re.match(r"^(.*?)\s*[\[(]\s*([^\])]+?)\s*[\])]\s*$", s)
+    if m:
+        s, unit = m.group(1), m.group(2)
+    else:
+        parts = s.rsplit("_", 1)
+        if len(parts) == 2 and _UNIT_ALIASES.get(parts[1], parts[1]) in {
+            **ANGLE_UNITS,
+            **LENGTH_UNITS,
+        }:
+            s, unit = parts
+    if unit is not None:
+        unit = _UNIT_ALIASES.get(unit, unit)
+    return re.sub(r"[\s_]+", "", s), unit
+
+
+_ELEMENT = r"(?:fr|m|mm|f)(\d)(\d)"
+_STD_PREFIX = ("std", "sd", "err", "u", "sigma")
+_STD_SUFFIX = ("std", "sd", "err")
+
+
+def parse_element(key: str):
+    """Parse a normalised column key as a Mueller element.
+
+    Returns ------- None, or ``(digits, normalised, is_std)`` with ``digits`` the two index digits
+    as written (base not yet known), ``normalised`` True for ``mjk/m11``, ``is_std`` True for a
+    standard-deviation column.
+    """
+    is_std = False
+    for p in _STD_PREFIX:
+        if key.startswith(p) and re.fullmatch(_ELEMENT + r"(?:/" + _ELEMENT + r")?", key[len(p) :]):
+            key, is_std = key[len(p) :], True
+            break
+    else:
+        for sfx in _STD_SUFFIX:
+            if key.endswith(sfx) and re.fullmatch(
+                _ELEMENT + r"(?:/" + _ELEMENT + r")?", key[: -len(sfx)]
+            ):
+                key, is_std = key[: -len(sfx)], True
+                break
+    m = re.fullmatch(_ELEMENT + r"(?:/" + _ELEMENT + r")?", key)
+    if not m:
+        return None
+    j, k, dj, dk = m.groups()
+    if dj is not None and dj != dk:
+        raise ValueError(
+            f"column {key!r}: only normalisation by the first element (m11 or m00) is supported"
+        )
+    return (int(j), int(k), None if dj is None else int(dj)), dj is not None, is_std
+
+
+def element_name(
+    j: int, k: int, *, prefix: str = "m", normalised: bool = False, std: bool = False
+) -> str:
+    """1-based column name of element ``(j, k)`` (0-based indices): ``m12``, ``f_r12/f_r11``,
+    ``std_m12``.
+    """
+    name = f"{prefix}{j + 1}{k + 1}" + (f"/{prefix}11" if normalised else "")
+    return f"std_{name}" if std else name
+
+
+def element_columns(table, default_base: int | None = None):
+    """Mueller element columns of ``table``: two dicts mapping 0-based ``(j, k)`` to ``(column
+    index, normalised)``, for the values and for their standard deviations (names: module
+    docstring). ``default_base`` (0 or 1) is used when the digits do not tell (no 0 and no 4 index);
+    None refuses."""
+    prefix_err = table.path
+    parsed = {}
+    for i, key in enumerate(table.keys):
+        p = parse_element(key)
+        if p is not None:
+            parsed[i] = p
+    if not parsed:
+        raise ValueError(
+            f"{prefix_err}: no Mueller element columns (f_r11 ... f_r44, m11 ... m44 or "
+            f"m12/m11 ...; columns: {', '.join(table.names)})"
+        )
+    digits = {
+        d
+        for (j, k, dn), _, _ in parsed.values()
+        for d in (j, k) + ((dn,) if dn is not None else ())
+    }
+    if 0 in digits and 4 in digits:
+        raise ValueError(f"{prefix_err}: element names mix 0-based (m00) and 1-based (m44) indices")
+    if 0 not in digits and 4 not in digits and default_base is None:
+        raise ValueError(
+            f"{prefix_err}: cannot tell 0-based from 1-based element names (no 0 and no 4 index)"
+        )
+    base = 0 if 0 in digits else 1 if 4 in digits else default_base
+    values, stds = {}, {}
+    for i, ((j, k, dn), normalised, is_std) in parsed.items():
+        jk = (j - base, k - base)
+        if not (0 <= jk[0] < 4 and 0 <= jk[1] < 4) or (dn is not None and dn != base):
+            raise ValueError(
+                f"{prefix_err}: column {table.names[i]!r} is not a Mueller element "
+                f"({'0-based' if base == 0 else '1-based'} names, normalised by the first)"
+            )
+        target = stds if is_std else values
+        if jk in target:
+            raise ValueError(
+                f"{prefix_err}: two columns for element {element_name(*jk)}"
+                f"{' (std)' if is_std else ''}: {table.names[target[jk][0]]!r}, "
+                f"{table.names[i]!r}"
+            )
+        target[jk] = (i, normalised)
+    return values, stds
+
+
+@dataclass
+class Table:
+    """A parsed table: ``names`` as written, ``keys``/``units`` normalised, ``values`` ``(rows,
+    columns)``, ``lines`` the file line number of each row, ``comments`` the comment lines (without
+    ``#``)."""
+
+    path: str
+    names: list
+    keys: list
+    units: list
+    values: np.ndarray
+    lines: np.ndarray
+    comments: list = field(default_factory=list)
+
+    def where(self, row: int) -> str:
+        """``"FILE, line L"`` of table row ``row``."""
+        return f"{self.path}, line {int(self.lines[row])}"
+
+    def find(self, aliases, what: str, *, required: bool = True, columns: dict | None = None):
+        """Index of the column for quantity ``what`` (one of ``aliases``, or ``columns[what]``), or
+        None.
+        """
+        if columns and what in columns:
+            target = normalise_name(str(columns[what]))[0]
+            hits = [i for i, k in enumerate(self.keys) if k == target]
+            if not hits:
+                raise ValueError(
+                    f"{self.path}: columns[{what!r}] = {columns[what]!r} is not a column "
+                    f"(columns: {', '.join(self.names)})"
+                )
+            return hits[0]
+        hits = [i for i, k in enumerate(self.keys) if k in aliases]
+        if len(hits) > 1:
+            raise ValueError(
+                f"{self.path}: columns {[self.names[i] for i in hits]} all name {what}; "
+                f"choose one with columns={{{what!r}: NAME}}"
+            )
+        if not hits:
+            if required:
+                raise ValueError(
+                    f"{self.path}: missing column for {what} (looked for "
+                    f"{', '.join(sorted(aliases))};"
+                    f" columns: {', '.join(self.names)}; map yours with columns={{{what!r}: NAME}})"
+                )
+            return None
+        return hits[0]
+
+    def check_unit(self, i: int, expected: str, what: str, argument: str) -> None:
+        """Raise if column ``i`` states a unit other than ``expected``."""
+        unit = self.units[i]
+        if unit is not None and unit != expected:
+            raise ValueError(
+                f"{self.path}: column {self.names[i]!r} is in {unit} but {argument}={expected!r}; "
+                f"pass {argument}={unit!r}"
+            )
+
+
+def _split(line: str, delimiter):
+    if delimiter is None:
+        return line.split()
+    return next(csv.reader(io.StringIO(line), delimiter=delimiter, skipinitialspace=True))
+
+
+def read_table(path) -> Table:
+    """Read a delimited table (module docstring); every cell must be a finite number.
+
+    Raises
+    ------
+    ValueError
+        Empty file, duplicate or missing header names, a row with the wrong number of cells, or a
+        cell that is not a finite number (NaN, inf, text), naming the file, line and column.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not a text table (not UTF-8 text: {exc.reason})") from None
+    header, delimiter, rows, lines, comments = None, None, [], [], []
+    for lineno, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line:
+            continue
+        if line.startswith("#"):
+            comments.append(line[1:].strip())
+            continue
+        if header is None:
+            delimiter = next((d for d in (",", "\t", ";") if d in line), None)
+            header = [h.strip() for h in _split(line, delimiter)]
+            continue
+        cells = _split(line, delimiter)
+        if len(cells) != len(header):
+            raise ValueError(
+                f"{path}, line {lineno}: {len(cells)} values for {len(header)} columns"
+            )
+        row = []
+        for name, cell in zip(header, cells):
+            try:
+                v = float(cell)
+            except ValueError:
+                raise ValueError(
+                    f"{path}, line {lineno}, column {name!r}: {cell!r} is not a number"
+                ) from None
+            if not np.isfinite(v):
+                raise ValueError(
+                    f"{path}, line {lineno}, column {name!r}: {cell!r} is not a finite number"
+                )
+            row.append(v)
+        rows.append(row)
+        lines.append(lineno)
+    if header is None or not rows:
+        raise ValueError(f"{path}: no header line and data rows found")
+    if any(not h for h in header):
+        raise ValueError(f"{path}: empty column name in the header")
+    keys, units = zip(*(normalise_name(h) for h in header))
+    dup = sorted({k for k in keys if keys.count(k) > 1})
+    if dup:
+        raise ValueError(f"{path}: duplicate columns {dup}")
+    return Table(
+        str(path),
+        list(header),
+        list(keys),
+        list(units),
+        np.array(rows, float),
+        np.array(lines),
+        comments,
+    )
+
+
+def format_table(names, values, comments=()) -> str:
+    """CSV text: ``# comment`` lines, a header of ``names`` and one row per line of ``values``
+    ``(rows, columns)``, 15 significant digits (unit conversions then read back as written: 30, not
+    29.999999999999996; the values to ~1e-15 relative)."""
+    out = [f"# {c}" for c in comments]
+    out.append(",".join(names))
+    out.extend(",".join(f"{float(v):.15g}" for v in row) for row in np.asarray(values, float))
+    return "\n".join(out) + "\n"

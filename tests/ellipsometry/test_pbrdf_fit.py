@@ -1,0 +1,115 @@
+"""fit_pbrdf: parameters recovered from Mueller BRDFs made by the model with noise, and from a NIST
+SCATMECH (pySCATMECH) file read through scatterlab.io (an independent forward model and file path).
+"""
+
+import numpy as np
+import pytest
+
+from scatterlab.ellipsometry import depolarization_index, fit_pbrdf
+from scatterlab.io import MuellerBRDF, write_mueller_brdf
+from scatterlab.pbrdf import Model
+from scatterlab.polarization import depolarizer, linear_retarder
+
+ETA, SIGMA = 1.39 - 0.34j, 0.3  # green paint at 1550 nm (a depolarizing, dielectric-like sample)
+
+
+def geometries(rng, n=30):
+    ti = np.radians(rng.uniform(15, 65, n))
+    tr = np.radians(rng.uniform(10, 75, n))
+    phi = rng.uniform(np.pi / 2, np.pi, n)
+    return ti, tr, phi
+
+
+def noisy(rng, rel=0.01, eta=ETA, sigma=SIGMA, wavelengths=(1.55e-6,)):
+    ti, tr, phi = geometries(rng)
+    M = Model(sigma).mueller(eta, ti, tr, phi)
+    std = rel * M[:, :1, :1] * np.ones((1, 4, 4))
+    y = M + std * rng.standard_normal(M.shape)
+    wl = np.resize(np.asarray(wavelengths), ti.size)
+    return MuellerBRDF(wl, ti, tr, phi, y, std, source="simulated")
+
+
+def test_recovers_parameters_with_calibrated_errors():
+    """1 % noise of F00 on all 16 elements at 30 out-of-plane geometries: the truth lies within 4
+    standard errors (seed fixed) and the reduced chi^2 is 1 within its sampling spread (sqrt(2/477)
+    ~ 0.065, 4 sigma)."""
+    fit = fit_pbrdf(noisy(np.random.default_rng(7)))
+    truth = np.array([ETA.real, -ETA.imag, SIGMA])
+    got = np.array([fit.n, fit.kappa, fit.sigma])
+    assert np.all(np.abs(got - truth) < 4 * fit.errors), (got, fit.errors)
+    assert np.all(fit.errors < 0.02)
+    assert fit.reduced_chi2 == pytest.approx(1.0, abs=0.26)
+    assert fit.weighted and fit.determined and fit.residuals.shape == (30, 4, 4)
+    assert fit.element_rms.shape == (4, 4) and np.all(fit.element_rms < 1.5)
+    # the diffuse term is all the model's depolarization, and the data were made by the model
+    assert fit.depolarization["explained"] == pytest.approx(1.0, abs=0.1)
+    assert fit.circular_flip_ratio > 3
+
+
+def test_normalised_data_and_wavelength_selection():
+    rng = np.random.default_rng(8)
+    data = noisy(rng, rel=0.0, wavelengths=(1.064e-6, 1.55e-6))
+    with pytest.raises(ValueError, match="several wavelengths"):
+        fit_pbrdf(data)
+    with pytest.raises(ValueError, match="not in the data"):
+        fit_pbrdf(data, wavelength=0.6e-6)
+    sel = data.select(1.55e-6)
+    norm = MuellerBRDF(
+        sel.wavelength, sel.theta_i, sel.theta_r, sel.phi, sel.normalised_mueller(), normalised=True
+    )
+    fit = fit_pbrdf(norm, wavelength=1.55e-6)
+    assert fit.normalised and np.all(np.isnan(fit.residuals[:, 0, 0]))
+    assert [fit.n, fit.kappa, fit.sigma] == pytest.approx([ETA.real, -ETA.imag, SIGMA], abs=1e-5)
+
+
+def test_depolarization_index_limits_and_partial_explanation():
+    assert depolarization_index(linear_retarder(0.7, 0.3)) == pytest.approx(1.0)  # Jones matrix
+    assert depolarization_index(depolarizer(0.0)) == pytest.approx(0.0)  # ideal depolarizer
+    # a sample depolarizing more than the model's diffuse term: Model + extra unpolarized light
+    rng = np.random.default_rng(9)
+    ti, tr, phi = geometries(rng, 25)
+    M = Model(SIGMA).mueller(ETA, ti, tr, phi)
+    extra = np.zeros_like(M)
+    extra[:, 0, 0] = 0.5 * M[:, 0, 0]
+    fit = fit_pbrdf(MuellerBRDF(1.55e-6, ti, tr, phi, M + extra))
+    assert 0 < fit.depolarization["explained"] < 0.9
+    assert fit.depolarization["measured_mean"] > fit.depolarization["model_mean"]
+
+
+def test_posterior_agrees_with_the_covariance():
+    """emcee (24 walkers x 600 steps, half burn-in) around the fit: posterior sd within 30 % of the
+    linearised standard errors (the chain's sd is estimated to ~10 % at this length) and medians
+    within one standard error of the fit."""
+    fit = fit_pbrdf(noisy(np.random.default_rng(7)), posterior_steps=600, rng=3)
+    s = fit.posterior["samples"]
+    np.testing.assert_allclose(s.std(0), fit.errors, rtol=0.3)
+    assert np.all(np.abs(np.median(s, 0) - [fit.n, fit.kappa, fit.sigma]) < fit.errors)
+    assert 0.2 < fit.posterior["acceptance"] < 0.8
+    assert fit.summary()["posterior"]["steps"] == 600
+
+
+def test_bad_arguments(tmp_path):
+    data = noisy(np.random.default_rng(1))
+    with pytest.raises(ValueError, match="starts"):
+        fit_pbrdf(data, starts=())
+    with pytest.raises(ValueError, match="bounds"):
+        fit_pbrdf(data, bounds=((1, 0.5), (0, 30), (0.01, 1.5)))
+    with pytest.raises(ValueError, match="posterior_steps"):
+        fit_pbrdf(data, posterior_steps=-5)
+    zero = MuellerBRDF(
+        data.wavelength, data.theta_i, data.theta_r, data.phi, data.mueller, 0 * data.std
+    )
+    with pytest.raises(ValueError, match="std"):
+        fit_pbrdf(zero)
+    # normalised elements in the specular direction without a diffuse term do not depend on sigma at
+    # all
+    th = np.radians([30.0, 50.0])
+    M = Model(SIGMA, diffuse="none").mueller(ETA, th, th, np.pi)
+    with pytest.warns(RuntimeWarning, match="do not determine"):
+        fit = fit_pbrdf(
+            MuellerBRDF(1.55e-6, th, th, np.pi, M / M[:, :1, :1], normalised=True),
+            diffuse="none",
+            starts=((1.5, 0.3),),
+        )
+    assert not fit.determined and np.all(np.isinf(fit.errors))
+    write_mueller_brdf(tmp_path / "d.csv", data)  # the writer accepts what the fit takes

@@ -1,0 +1,200 @@
+import numpy as np
+import pytest
+
+from scatterlab.imaging import ANGLES_0_45_90_135, channel_images, stokes_from_channels
+from scatterlab.io import (
+    Optics,
+    PolarimetricDataset,
+    Truth,
+    demosaic,
+    mosaic,
+    read_dataset,
+    write_dataset,
+    write_dataset_tiff,
+)
+
+
+def small(rng=0, truth=True, G=2, H=6, W=8):
+    rng = np.random.default_rng(rng)
+    S = np.stack(
+        [np.full((H, W), 100.0), rng.uniform(-30, 30, (H, W)), rng.uniform(-30, 30, (H, W))]
+    )
+    counts = np.stack([channel_images(S * (g + 1), ANGLES_0_45_90_135) for g in range(G)])
+    t = None
+    if truth:
+        labels = rng.integers(0, 2, (H, W))
+        t = Truth(
+            labels,
+            ["paint", "metal"],
+            np.array([1.39, 1.44]),
+            np.array([0.34, 16.0]),
+            np.array([0.3, 0.3]),
+            s0=rng.uniform(1, 2, (G, H, W)),
+            dolp=rng.uniform(0, 1, (G, H, W)),
+            psf=rng.uniform(0, 1, (G, H, W)),
+        )
+    return PolarimetricDataset(
+        counts,
+        ANGLES_0_45_90_135,
+        np.radians([40.0, 55.0][:G]),
+        1.55e-6,
+        Optics(pixels_per_lambda_over_d=2.0),
+        read_noise=10.0,
+        truth=t,
+        title="test",
+        description="simulated",
+        simulated=True,
+    )
+
+
+def assert_same(a, b):
+    np.testing.assert_allclose(a.counts, b.counts, rtol=1e-6)  # images are stored as float32
+    np.testing.assert_allclose(
+        np.mod(a.polarizer_angles, np.pi), np.mod(b.polarizer_angles, np.pi), atol=1e-12
+    )
+    np.testing.assert_allclose(a.theta, b.theta, rtol=1e-14)
+    assert a.wavelength == pytest.approx(b.wavelength, rel=1e-14)
+    assert a.optics == b.optics and a.read_noise == b.read_noise and a.simulated == b.simulated
+    assert (a.title, a.description) == (b.title, b.description)
+    if a.truth is not None:
+        assert b.truth.names == a.truth.names
+        np.testing.assert_array_equal(b.truth.labels, a.truth.labels)
+        for k in ("n", "kappa", "sigma"):
+            np.testing.assert_array_equal(getattr(b.truth, k), getattr(a.truth, k))
+        for k in ("s0", "dolp", "psf"):
+            np.testing.assert_allclose(getattr(b.truth, k), getattr(a.truth, k), rtol=1e-6)
+
+
+@pytest.mark.parametrize("suffix", [".h5", ".npz", ".tif"])
+@pytest.mark.parametrize("dofp", [None, ((90, 45), (135, 0)), ((0, 45), (135, 90))])
+def test_round_trip_every_format(tmp_path, suffix, dofp):
+    ds = small()
+    path = write_dataset(tmp_path / f"d{suffix}", ds, dofp_pattern=dofp)
+    back = read_dataset(path)
+    assert_same(ds, back)
+    assert back.shape == (2, 4, 6, 8)
+    if dofp is not None:
+        assert "demosaiced" in back.notes[0]
+    if suffix == ".tif":
+        assert_same(ds, read_dataset(path.with_suffix(".toml")))
+
+
+def test_dofp_demosaic_layout_and_stokes():
+    """A raw frame of a uniform scene with known linear Stokes: each superpixel position carries the
+    intensity of its polarizer (Malus, Eq. 197), whatever the layout."""
+    S = np.array([1.0, 0.3, -0.2])
+    raw = np.empty((4, 6))
+    pattern = np.array([[90.0, 45.0], [135.0, 0.0]])
+    for i in range(2):
+        for j in range(2):
+            a = np.radians(pattern[i, j])
+            raw[i::2, j::2] = 0.5 * (S[0] + S[1] * np.cos(2 * a) + S[2] * np.sin(2 * a))
+    ch, ang = demosaic(raw, pattern)
+    assert ch.shape == (4, 2, 3) and np.degrees(ang) == pytest.approx([0, 45, 90, 135])
+    np.testing.assert_allclose(stokes_from_channels(ch, ang)[:, 0, 0], S, atol=1e-15)
+    np.testing.assert_array_equal(mosaic(ch, ang, pattern), raw)
+
+
+@pytest.mark.parametrize(
+    "pattern, message",
+    [
+        ([[0, 45], [90, 180]], "four different"),
+        ([0, 45, 90, 135], "2x2"),
+        ([[0, 45], [90, np.nan]], "finite"),
+    ],
+)
+def test_bad_dofp_layouts(pattern, message):
+    with pytest.raises(ValueError, match=message):
+        demosaic(np.zeros((4, 4)), pattern)
+    with pytest.raises(ValueError, match="even"):
+        demosaic(np.zeros((5, 4)))
+
+
+def test_optics_sampling():
+    o = Optics(aperture_diameter=0.1, pixel_pitch=5e-6, focal_length=1.0)
+    assert o.sampling(1e-6) == pytest.approx(2.0)  # lambda f / (D p)
+    assert o.pupil_radius(128, 1e-6) == pytest.approx(32.0)
+    with pytest.raises(ValueError, match="pixels_per_lambda_over_d"):
+        Optics(aperture_diameter=0.1)
+    with pytest.raises(ValueError, match="> 0"):
+        Optics(pixels_per_lambda_over_d=-2)
+
+
+def edit_npz(tmp_path, **changes):
+    path = write_dataset(tmp_path / "d.npz", small())
+    with np.load(path) as z:
+        flat = {k: z[k] for k in z.files}
+    for k, v in changes.items():
+        if v is None:
+            flat.pop(k)
+        else:
+            flat[k] = v
+    bad = tmp_path / "bad.npz"
+    np.savez(bad, **flat)
+    return bad
+
+
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"counts": None}, "missing 'counts'"),
+        ({"theta_deg": np.array([40.0])}, "1 angles for 2 geometries"),
+        ({"theta_deg": np.array([40.0, 95.0])}, r"theta_deg' must be in \(0, 90\)"),
+        ({"polarizer_deg": np.array([0.0, 45, 90])}, "3 angles for 4 channels"),
+        ({"polarizer_deg": np.array([0.0, 180, 0, 180])}, "three different orientations"),
+        ({"counts": np.zeros((2, 4, 6))}, "'counts' must have 4 dimensions"),
+        ({"counts": np.full((2, 4, 6, 8), np.nan)}, "'counts' contains NaN"),
+        ({"wavelength_um": np.array(-1.0)}, "'wavelength_um' must be > 0"),
+        ({"wavelength_um": np.array(1550.0)}, "outside"),
+        ({"pixels_per_lambda_over_d": None}, "optics need"),
+        ({"truth_dolp": np.zeros((2, 3, 3))}, "'truth_dolp' must have shape"),
+        ({"truth_n": np.array([1.0])}, "one entry per label"),
+        ({"raw": np.zeros((2, 12, 16))}, "both 'counts' and 'raw'"),
+    ],
+)
+def test_bad_dataset_files_name_the_problem(tmp_path, changes, message):
+    with pytest.raises(ValueError, match=message) as err:
+        read_dataset(edit_npz(tmp_path, **changes))
+    assert "bad.npz" in str(err.value)
+
+
+def test_bad_files_and_kinds(tmp_path):
+    for name in ("scene.toml.csv", "x.npy", "x.json"):
+        with pytest.raises(ValueError, match="expected a dataset"):
+            read_dataset(tmp_path / name)
+    (tmp_path / "junk.h5").write_text("not hdf5")
+    with pytest.raises(ValueError, match="junk.h5: not an HDF5 file"):
+        read_dataset(tmp_path / "junk.h5")
+    path = write_dataset_tiff(tmp_path / "s.tif", small(truth=False))
+    side = path.with_suffix(".toml")
+    side.write_text(side.read_text().replace("polarizer_deg = [", "polarizer_deg = [20.0, "))
+    with pytest.raises(ValueError, match="8 TIFF pages for 2 geometries .* x 5 channels"):
+        read_dataset(path)
+    side.unlink()
+    with pytest.raises(ValueError, match="sidecar s.toml"):
+        read_dataset(path)
+
+
+def test_users_tiff_stack_with_one_file_per_geometry_and_a_minimal_sidecar(tmp_path):
+    import tifffile
+
+    ds = small(truth=False)
+    for g in range(2):
+        tifffile.imwrite(
+            tmp_path / f"geom{g}.tif", ds.counts[g].astype(np.float32), photometric="minisblack"
+        )
+    (tmp_path / "plate.toml").write_text(
+        'tiff = ["geom0.tif", "geom1.tif"]\nwavelength_um = 1.55\ntheta_deg = [40, 55]\n'
+        "polarizer_deg = [0, 45, 90, 135]\npixels_per_lambda_over_d = 2.0\n"
+    )
+    back = read_dataset(tmp_path / "plate.toml")
+    np.testing.assert_allclose(back.counts, ds.counts, rtol=1e-6)
+    assert back.truth is None and not back.simulated and back.read_noise is None
+    assert back.stokes().shape == (2, 3, 6, 8)
+
+
+def test_a_scene_toml_is_not_a_dataset(tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text("image_size = 64\ngeometry_deg = [30, 50]\n")
+    with pytest.raises(ValueError, match="expected a dataset.*scene description"):
+        read_dataset(scene)
