@@ -11,15 +11,15 @@
 * ``ellipsometry_in_plane.csv`` -- in-plane normalised elements of aluminium at 1.064 um with
   standard deviations;
 * ``painted_plate.h5`` / ``.npz`` / ``.tif`` + ``.toml`` -- a painted aluminium plate with
-  bare-metal letters (:func:`scatterlab.imaging.painted_plate`), 48x48 pixels, 2 specular geometries
+  bare-metal letters (:func:`scatterlab.imaging.painted_plate`), 64x64 pixels, 2 specular geometries
   (40 and 55 deg), 4 channels (0/45/90/135 deg) through one Kolmogorov phase screen each (D/r0 =
   7.9), shot and read noise, with the truth (labels, indices, roughness, object S0 and DOLP, PSFs);
-* ``painted_plate_dofp.tif`` + ``.toml`` -- the same as division-of-focal-plane raw frames (96x96,
+* ``painted_plate_dofp.tif`` + ``.toml`` -- the same as division-of-focal-plane raw frames (128x128,
   Sony layout).
 
 TIFF stacks keep their truth beside them in ``NAME-truth.npz``.
 
-The image stacks are simulated exactly as :func:`scatterlab.characterization.pipeline.observe` does
+The image stacks are simulated by the main job's acquisition stage, :func:`scatterlab.characterization.acquire`
 (the camera sees the plate foreshortened by cos theta; the pupil is half the image, 2 pixels per
 lambda/D).
 """
@@ -41,7 +41,7 @@ LABEL = "simulated by scatterlab (scatterlab.io.examples, seed {seed}); not a me
 
 
 def simulate_painted_plate(
-    n: int = 48,
+    n: int = 64,
     theta_deg=(40.0, 55.0),
     d_over_r0: float = 7.9,
     photons: float = 1e5,
@@ -69,41 +69,25 @@ def simulate_painted_plate(
     PolarimetricDataset
         With ``truth`` in object coordinates and ``simulated=True``.
     """
-    from scatterlab.characterization.registration import foreshorten
-    from scatterlab.imaging import (
-        ANGLES_0_45_90_135,
-        Scene,
-        channel_images,
-        circular_pupil,
-        detect,
-        painted_plate,
-        phase_screen,
-        psf,
-        render_stokes,
-    )
+    from scatterlab.characterization import Plate, SceneConfig, acquire
+    from scatterlab.characterization.scene_config import plate_labels
+    from scatterlab.imaging import ANGLES_0_45_90_135
     from scatterlab.io.dataset import Optics, PolarimetricDataset, Truth
 
     seed = rng if isinstance(rng, (int, np.integer)) else "given"
     rng = np.random.default_rng(rng)
-    labels = painted_plate(n, rng=rng).labels
+    # simulated exactly as the main job's acquisition stage does (one code path)
+    cfg = SceneConfig(image_size=n, photons=photons, read_noise=read_noise).validate()
+    plate = Plate("aluminium", ALUMINIUM.real, -ALUMINIUM.imag, PAINT.real, -PAINT.imag, 0.3, 0.3)
+    labels = plate_labels(cfg, rng)
     materials, rough = [PAINT, ALUMINIUM, ALUMINIUM], [0.3, 0.3, 0.3]
-    pupil = circular_pupil(n // 2, n / 4)
     counts, s0, dolp, psfs = [], [], [], []
     for th in np.radians(theta_deg):
-        S_obj = render_stokes(Scene(labels, materials, rough, th, th, np.pi))
-        S_cam = render_stokes(Scene(foreshorten(labels, th), materials, rough, th, th, np.pi))
-        h = psf(pupil, phase_screen(n // 2, 1.0, n / 2 / d_over_r0, rng), pad=2)
-        counts.append(
-            detect(
-                channel_images(S_cam, ANGLES_0_45_90_135, h),
-                rng,
-                photons=photons,
-                read_noise=read_noise,
-            )
-        )
-        s0.append(S_obj[0])
-        dolp.append(np.hypot(S_obj[1], S_obj[2]) / S_obj[0])
-        psfs.append(h)
+        acq = acquire(plate, labels, th, f"D_r0_{d_over_r0:g}", d_over_r0, cfg, rng)
+        counts.append(acq.counts)
+        s0.append(acq.truth_s0)
+        dolp.append(acq.truth_dolp)
+        psfs.append(acq.psf_true)
     truth = Truth(
         labels,
         ["paint", "metal", "scratch"],

@@ -50,7 +50,7 @@ def test_examples_read_as_described():
         )
     }
     for name, ds in sets.items():
-        assert ds.shape == (2, 4, 48, 48) and ds.simulated and "simulated" in ds.description, name
+        assert ds.shape == (2, 4, 64, 64) and ds.simulated and "simulated" in ds.description, name
         np.testing.assert_array_equal(ds.counts, sets["painted_plate.h5"].counts)
         assert ds.truth.names == ["paint", "metal", "scratch"]
     ds = sets["painted_plate.h5"]
