@@ -6,6 +6,7 @@
     scatterlab study run ID [--quick] [--out DIR] [--seed N] [--force]
     scatterlab study run all [--quick] [--out DIR]
     scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
+    scatterlab analyze DATASET [--out DIR] [--force] [--psf blind|diffraction] [--iterations N]
     scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--time-convention exp(-iwt)]
 
 Sweeps inside studies use ``--workers N`` local processes or a Dask cluster
@@ -69,6 +70,7 @@ ellipsometry, and fits the complex index n - j kappa and roughness of materials 
 commands:
   study          list or run the studies that reproduce the reference text's figures and tables
   characterize   simulate, deconvolve, classify and invert a painted-plate scene (TOML) end to end
+  analyze        restore, classify and invert measured polarimetric channel images (a dataset) end to end
   fit-mueller    fit n, kappa, sigma of the pBRDF to a measured Mueller BRDF table (CSV) and report
 
 Run `scatterlab COMMAND --help` for a command's options. Angles are in degrees on the command line
@@ -110,6 +112,26 @@ def _characterize(args) -> int:
         ex = _executor(args)
         try:
             report = characterize(cfg, args.out, overwrite=args.force, executor=ex)
+        finally:
+            ex.close()
+    except (ValueError, FileExistsError, FileNotFoundError) as exc:
+        print(f"scatterlab: {exc}", file=sys.stderr)
+        return 2
+    print(f"report: {report}")
+    return 0
+
+
+def _analyze(args) -> int:
+    from scatterlab.characterization.analysis import AnalyzeSettings, analyze
+
+    try:
+        if args.seed < 0:
+            raise ValueError(f"--seed must be a non-negative integer, got {args.seed}")
+        settings = AnalyzeSettings(psf=args.psf, iterations=args.iterations, priors=args.priors,
+                                   sigma=args.sigma, posterior_steps=args.posterior_steps, seed=args.seed)
+        ex = _executor(args)
+        try:
+            report = analyze(args.dataset, args.out, settings=settings, overwrite=args.force, executor=ex)
         finally:
             ex.close()
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
@@ -252,7 +274,22 @@ def main(argv=None) -> int:
     ch.add_argument("--workers", type=int, default=None, help="local worker processes")
     ch.add_argument("--scheduler", default=None, help="Dask scheduler address")
     _add_fit_mueller(sub)
+    an = sub.add_parser("analyze", help="restore, classify and invert measured channel images (no simulation)")
+    an.add_argument("dataset", help="polarimetric dataset: .h5, .npz, or a TIFF stack with its sidecar .toml")
+    an.add_argument("--out", default="results/analyze", help="output folder")
+    an.add_argument("--force", action="store_true", help="replace an existing report")
+    an.add_argument("--psf", choices=["blind", "diffraction"], default="blind",
+                    help="blind deconvolution (through turbulence) or the optics' known diffraction PSF")
+    an.add_argument("--iterations", type=int, default=150, help="EM iterations (default 150)")
+    an.add_argument("--priors", choices=["ch5", "ch6", "ch7"], default="ch7", help="DOLP prior set")
+    an.add_argument("--sigma", type=float, default=0.3, help="known roughness (rms facet slope, default 0.3)")
+    an.add_argument("--posterior-steps", type=int, default=1500, help="MCMC chain length (default 1500)")
+    an.add_argument("--seed", type=int, default=20101210, help="random seed (default 20101210)")
+    an.add_argument("--workers", type=int, default=None, help="local worker processes")
+    an.add_argument("--scheduler", default=None, help="Dask scheduler address")
     args = parser.parse_args(argv)
+    if args.command == "analyze":
+        return _analyze(args)
     if args.command == "study":
         return _study(args)
     if args.command == "characterize":

@@ -41,7 +41,9 @@ def estimated_plate(regions, thetas, sigma) -> Plate:
     for r in regions:
         f = fit_dolp(r.mean, thetas, thetas, sigma=sigma)
         fits[r.name] = (max(float(f.n), 0.05), max(float(f.kappa), 0.0))
-    (pn, pk), (mn, mk) = fits["paint"], fits["metal"]
+    # a region the data lack (none of its pixels survive the erosion) keeps a typical material: it has no
+    # pixels in the re-simulated layout's scored regions either
+    (pn, pk), (mn, mk) = fits.get("paint", (1.5, 0.0)), fits.get("metal", (1.44, 16.0))
     return Plate("estimate", mn, mk, pn, pk, sigma, sigma)
 
 
