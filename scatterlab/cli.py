@@ -101,44 +101,45 @@ def _load_scene_file(path):
         raise ValueError(f"expected a TOML scene: {p.name} is not valid TOML ({exc})") from None
 
 
+def _report(args, job) -> int:
+    """Run ``job(executor) -> report path`` with the executor of ``args``; print the report or the error."""
+    try:
+        ex = _executor(args)
+        try:
+            report = job(ex)
+        finally:
+            ex.close()
+    except (ValueError, FileExistsError, FileNotFoundError) as exc:
+        print(f"scatterlab: {exc}", file=sys.stderr)
+        return 2
+    print(f"report: {report}")
+    return 0
+
+
 def _characterize(args) -> int:
     from scatterlab.characterization import characterize, default_scene
 
     try:
         cfg = _load_scene_file(args.scene) if args.scene else default_scene()
-        if args.quick:  # a small, fast version of the same scene (tests, smoke runs)
-            cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = 64, cfg.geometry_deg[::3], cfg.d_over_r0[:1]
-            cfg.iterations, cfg.posterior_steps = 15, 400
-        ex = _executor(args)
-        try:
-            report = characterize(cfg, args.out, overwrite=args.force, executor=ex)
-        finally:
-            ex.close()
-    except (ValueError, FileExistsError, FileNotFoundError) as exc:
+    except (ValueError, FileNotFoundError) as exc:
         print(f"scatterlab: {exc}", file=sys.stderr)
         return 2
-    print(f"report: {report}")
-    return 0
+    if args.quick:  # a small, fast version of the same scene (tests, smoke runs)
+        cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = 64, cfg.geometry_deg[::3], cfg.d_over_r0[:1]
+        cfg.iterations, cfg.posterior_steps = 15, 400
+    return _report(args, lambda ex: characterize(cfg, args.out, overwrite=args.force, executor=ex))
 
 
 def _analyze(args) -> int:
     from scatterlab.characterization.analysis import AnalyzeSettings, analyze
 
-    try:
-        if args.seed < 0:
-            raise ValueError(f"--seed must be a non-negative integer, got {args.seed}")
-        settings = AnalyzeSettings(psf=args.psf, iterations=args.iterations, priors=args.priors,
-                                   sigma=args.sigma, posterior_steps=args.posterior_steps, seed=args.seed)
-        ex = _executor(args)
-        try:
-            report = analyze(args.dataset, args.out, settings=settings, overwrite=args.force, executor=ex)
-        finally:
-            ex.close()
-    except (ValueError, FileExistsError, FileNotFoundError) as exc:
-        print(f"scatterlab: {exc}", file=sys.stderr)
+    if args.seed < 0:
+        print(f"scatterlab: --seed must be a non-negative integer, got {args.seed}", file=sys.stderr)
         return 2
-    print(f"report: {report}")
-    return 0
+    settings = AnalyzeSettings(psf=args.psf, iterations=args.iterations, priors=args.priors, sigma=args.sigma,
+                               posterior_steps=args.posterior_steps, seed=args.seed)
+    return _report(args, lambda ex: analyze(args.dataset, args.out, settings=settings, overwrite=args.force,
+                                            executor=ex))
 
 
 def _fit_mueller(args) -> int:
