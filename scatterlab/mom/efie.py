@@ -267,6 +267,8 @@ class Solution:
 
         Needs tapered incidences (they carry a finite power).
         """
+        if not self.contour.closed:
+            _angles(theta_s, "theta_s", np.pi / 2)
         return np.abs(self.far_field(theta_s)) ** 2 / (8 * np.pi * self.k * self._powers())
 
     def transmission_coefficient(self, theta_t) -> np.ndarray:
@@ -286,7 +288,7 @@ class Solution:
         if np.imag(self.eta) != 0:
             raise ValueError(f"transmission_coefficient needs a lossless lower medium (kappa = 0), got eta = "
                              f"{self.eta}: the field decays inside an absorber and has no far field")
-        th = _angles(theta_t, "theta_t")
+        th = _angles(theta_t, "theta_t", np.pi / 2)
         n2 = float(np.real(self.eta))
         k2 = self.k * n2
         rho = 1.0 if self.polarization == "s" else n2 * n2
@@ -297,11 +299,12 @@ class Solution:
         return T if np.ndim(theta_t) else T[0]
 
 
-def _angles(theta, name):
-    """Angles [rad] as a 1-D array, finite and within [-pi, pi]."""
+def _angles(theta, name, limit=np.pi):
+    """Angles [rad] as a 1-D array, finite and within [-limit, limit]."""
     th = np.atleast_1d(np.asarray(theta, float))
-    if not np.all(np.isfinite(th)) or np.any(np.abs(th) > np.pi):
-        raise ValueError(f"{name} must be finite angles in [-pi, pi] rad (angles are in radians)")
+    if not np.all(np.isfinite(th)) or np.any(np.abs(th) > limit):
+        raise ValueError(f"{name} must be finite angles in [-{limit:.4g}, {limit:.4g}] rad (angles are in "
+                         "radians)")
     return th
 
 
