@@ -270,3 +270,16 @@ def test_incoherent_scattering_takes_polarization_and_eta():
     assert res.polarization == "p" and res.eta == GLASS
     np.testing.assert_allclose(res.energy + res.transmitted, 1.0, atol=5e-3)
     assert np.all(res.energy < 0.1)  # near Brewster's angle (56 deg) p-pol glass reflects little
+
+
+def test_forward_backward_agrees_with_lu_for_p_pol_and_penetrable_surfaces():
+    """The block forward-backward path (psi and U of a pulse kept in one block) against one LU."""
+    incs = [TaperedWave(t, 5.0) for t in np.radians([20, 50])]
+    for ppw, kw in ((10, {"polarization": "p"}), (15, {"polarization": "s", "eta": GLASS}),
+                    (10, {"polarization": "p", "eta": ALUMINIUM, "method": "impedance"})):
+        x, y = rough_surface(20, 1 / ppw, 0.3, correlation_length_for_slope(0.3, 0.3), 3)
+        lu = solve(x, y, LAM, incs, **kw)
+        fb = solve(x, y, LAM, incs, solver="fb", tol=1e-9, block=64, **kw)
+        assert fb.solver == "fb"
+        for a, b in ((lu.surface_field, fb.surface_field), (lu.current, fb.current)):
+            assert np.linalg.norm(a - b) <= 1e-6 * max(np.linalg.norm(a), 1e-300)
