@@ -1,29 +1,35 @@
 r"""Single- and double-layer matrices of the 2-D Helmholtz operator for any (complex) wavenumber.
 
 With time dependence exp(+j w t) and :math:`G(\mathbf r, \mathbf r') = -\frac j4 H_0^{(2)}(kR)`,
-:math:`k = k_0\eta` (:math:`\eta = n - j\kappa`, so :math:`H^{(2)}` of a complex argument decays into a lossy
-medium), pulse basis and point matching at the pulse centres give
+:math:`k = k_0\eta` (:math:`\eta = n - j\kappa`, so :math:`H^{(2)}` of a complex argument decays
+into a lossy medium), pulse basis and point matching at the pulse centres give
 
 .. math:: S_{mn} = \int_{C_n} G(\mathbf r_m, \mathbf r')\,ds', \qquad
           D_{mn} = \int_{C_n} \frac{\partial G(\mathbf r_m, \mathbf r')}{\partial n'}\,ds'
-          = \int_{C_n}\frac{jk}{4}H_1^{(2)}(kR)\,\frac{\hat n'\cdot(\mathbf r' - \mathbf r_m)}{R}\,ds'
+          = \int_{C_n}\frac{jk}{4}H_1^{(2)}(kR)\,\frac{\hat n'\cdot(\mathbf r' - \mathbf
+          r_m)}{R}\,ds'
 
 (:math:`D` is the principal value; the :math:`\pm\frac12` jump is added by the caller). Quadrature:
 
 * each pulse is the parabola through its centre with the contour's tangent and curvature vector
-  :math:`\boldsymbol\kappa = d^2\mathbf r/ds^2` (from the points), so the double layer sees the curvature;
-* self terms: :math:`S_{nn}` by subtracting the logarithm, :math:`H_0^{(2)}(kr) + \frac{2j}{\pi}\ln r` being
-  smooth (8-point Gauss-Legendre) and :math:`\int_0^h\ln r\,dr = h\ln h - h` exact; :math:`D_{nn}` from the
-  parabola, :math:`\hat n\cdot(\mathbf r(s)-\mathbf r_n) = -\frac12(\hat n\cdot\boldsymbol\kappa)s^2`, whose
-  static limit is :math:`(\hat n\cdot\boldsymbol\kappa)\Delta s/(4\pi)` (the kernel :math:`zH_1^{(2)}(kz)` is
-  regular, 8-point Gauss-Legendre on the half pulse);
-* near band (``band`` wavelengths of the medium either side, 3 to 30 pulses): Gauss-Legendre on the curved
-  pulse, 8 points for the two nearest neighbours and 4 beyond, against the quadratic through the unknowns at
-  the pulse and its two neighbours (product integration; constant at the ends of an open profile);
-* the midpoint rule beyond, with the Euler-Maclaurin end correction :math:`-\frac{h^2}{24}f'(a)` where it
-  meets the band (:math:`f'` from the first three far pulses), so the error is :math:`O(h^3)`;
+  :math:`\boldsymbol\kappa = d^2\mathbf r/ds^2` (from the points), so the double layer sees the
+  curvature;
+* self terms: :math:`S_{nn}` by subtracting the logarithm, :math:`H_0^{(2)}(kr) + \frac{2j}{\pi}\ln
+  r` being smooth (8-point Gauss-Legendre) and :math:`\int_0^h\ln r\,dr = h\ln h - h` exact;
+  :math:`D_{nn}` from the parabola, :math:`\hat n\cdot(\mathbf r(s)-\mathbf r_n) = -\frac12(\hat
+  n\cdot\boldsymbol\kappa)s^2`, whose static limit is :math:`(\hat n\cdot\boldsymbol\kappa)\Delta
+  s/(4\pi)` (the kernel :math:`zH_1^{(2)}(kz)` is regular, 8-point Gauss-Legendre on the half
+  pulse);
+* near band (``band`` wavelengths of the medium either side, 3 to 30 pulses): Gauss-Legendre on the
+  curved pulse, 8 points for the two nearest neighbours and 4 beyond, against the quadratic through
+  the unknowns at the pulse and its two neighbours (product integration; constant at the ends of an
+  open profile);
+* the midpoint rule beyond, with the Euler-Maclaurin end correction :math:`-\frac{h^2}{24}f'(a)`
+  where it meets the band (:math:`f'` from the first three far pulses), so the error is
+  :math:`O(h^3)`;
 * far: the midpoint rule with the pulse's phase factor
-  :math:`\mathrm{sinc}(k\Delta s_n\cos\alpha_{mn}/2)` (the exact pulse integral of the outgoing phase).
+  :math:`\mathrm{sinc}(k\Delta s_n\cos\alpha_{mn}/2)` (the exact pulse integral of the outgoing
+  phase).
 """
 
 from __future__ import annotations
@@ -38,11 +44,14 @@ __all__ = ["arclength_contour", "curvature", "hankel2", "layer_matrices"]
 _GL8 = np.polynomial.legendre.leggauss(8)
 _GL4 = np.polynomial.legendre.leggauss(4)
 _MAX_BAND = 30  # pulses
-_DECAYED = -40.0  # Im(kR) below this: |H^(2)| < e^-40 |H^(2)| at the source; set to 0 without evaluating
+_DECAYED = (
+    -40.0
+)  # Im(kR) below this: |H^(2)| < e^-40 |H^(2)| at the source; set to 0 without evaluating
 
 
 def hankel2(order: int, z):
-    """H_order^(2)(z), order 0 or 1, for real or complex z (Im z <= 0); 0 where Im z < -40 (decayed by e^-40)."""
+    """H_order^(2)(z), order 0 or 1, for real or complex z (Im z <= 0); 0 where Im z < -40 (decayed
+    by e^-40)."""
     z = np.asarray(z)
     if not np.iscomplexobj(z):
         if order == 0:
@@ -58,7 +67,8 @@ def hankel2(order: int, z):
 
 def arclength_contour(c):
     """A copy of the contour whose pulse lengths are arcs, not chords: the central-difference chord
-    c2 = |r_(n+1) - r_(n-1)| spans an arc c2 (1 + kappa^2 c2^2 / 24) (exact to O(kappa^4 c2^4) on a circle)."""
+    c2 = |r_(n+1) - r_(n-1)| spans an arc c2 (1 + kappa^2 c2^2 / 24) (exact to O(kappa^4 c2^4) on a
+    circle)."""
     import dataclasses
 
     kx, ky = curvature(c)
@@ -66,23 +76,27 @@ def arclength_contour(c):
 
 
 def curvature(c):
-    """Curvature vector d^2 r / ds^2 (kx, ky) [1/m] at the points of a contour (periodic when closed)."""
+    """Curvature vector d^2 r / ds^2 (kx, ky) [1/m] at the points of a contour (periodic when
+    closed)."""
     if c.closed:
+
         def d(f):
             return (np.roll(f, -1) - np.roll(f, 1)) / 2
 
         def d2(f):
             return np.roll(f, -1) - 2 * f + np.roll(f, 1)
     else:
+
         def d(f):
             return np.gradient(f)
 
         def d2(f):
             return np.gradient(np.gradient(f))
+
     xp, yp, xpp, ypp = d(c.x), d(c.y), d2(c.x), d2(c.y)
     s2 = xp * xp + yp * yp
     # the component of r'' normal to the tangent, per unit arclength squared
-    cross = (xp * ypp - yp * xpp) / s2 ** 1.5  # signed curvature (left of the tangent positive)
+    cross = (xp * ypp - yp * xpp) / s2**1.5  # signed curvature (left of the tangent positive)
     return -yp / np.sqrt(s2) * cross, xp / np.sqrt(s2) * cross
 
 
@@ -108,7 +122,9 @@ def _far_rows(S, D, c, k, rows):
         if S is not None:
             S[rows] = -0.25j * hankel2(0, z) * phase
         if D is not None:
-            D[rows] = 0.25j * k * hankel2(1, z) * (c.nx[None, :] * dx + c.ny[None, :] * dy) / R * phase
+            D[rows] = (
+                0.25j * k * hankel2(1, z) * (c.nx[None, :] * dx + c.ny[None, :] * dy) / R * phase
+            )
 
 
 def _offset_pairs(N, o, closed):
@@ -116,11 +132,13 @@ def _offset_pairs(N, o, closed):
     i = np.arange(N)
     if closed:
         shifts = {o % N, (-o) % N} - {0}
-        return (np.concatenate([i for _ in shifts]) if shifts else i[:0],
-                np.concatenate([(i + sh) % N for sh in shifts]) if shifts else i[:0])
+        return (
+            np.concatenate([i for _ in shifts]) if shifts else i[:0],
+            np.concatenate([(i + sh) % N for sh in shifts]) if shifts else i[:0],
+        )
     if o >= N:
         return i[:0], i[:0]
-    return np.concatenate([i[:N - o], i[o:]]), np.concatenate([i[o:], i[:N - o]])
+    return np.concatenate([i[: N - o], i[o:]]), np.concatenate([i[o:], i[: N - o]])
 
 
 def _pairs(N, nb, closed):
@@ -130,17 +148,28 @@ def _pairs(N, nb, closed):
     if not parts:
         return np.zeros(0, int), np.zeros(0, int), np.zeros(0, int)
     offs = [np.full(p[0].size, o) for o, p in zip(range(1, nb + 1), parts)]
-    return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]), np.concatenate(offs)
+    return (
+        np.concatenate([p[0] for p in parts]),
+        np.concatenate([p[1] for p in parts]),
+        np.concatenate(offs),
+    )
 
 
 def _lagrange(c, n, s):
-    """Weights (3, P, Q) of psi_{n-1}, psi_n, psi_{n+1} in the quadratic through them, at arclengths s (P, Q)
-    from the centre of pulse n; constant (pulse) interpolation at the ends of an open profile."""
+    """Weights (3, P, Q) of psi_{n-1}, psi_n, psi_{n+1} in the quadratic through them, at arclengths
+    s (P, Q) from the centre of pulse n; constant (pulse) interpolation at the ends of an open
+    profile."""
     N = c.size
     lo, hi = (n - 1) % N, (n + 1) % N
     sm = -(0.5 * (c.ds[n] + c.ds[lo]))[:, None]
     sp = (0.5 * (c.ds[n] + c.ds[hi]))[:, None]
-    w = np.stack([s * (s - sp) / (sm * (sm - sp)), (s - sm) * (s - sp) / (sm * sp), s * (s - sm) / (sp * (sp - sm))])
+    w = np.stack(
+        [
+            s * (s - sp) / (sm * (sm - sp)),
+            (s - sm) * (s - sp) / (sm * sp),
+            s * (s - sm) / (sp * (sp - sm)),
+        ]
+    )
     if not c.closed:
         end = (n == 0) | (n == N - 1)
         w[:, end] = np.array([0.0, 1.0, 0.0])[:, None, None]
@@ -154,7 +183,8 @@ def _scatter(A, m, cols, w, values):
 
 
 def _near(S, D, c, k, kx, ky, m, n, gl):
-    """Gauss-Legendre over the curved source pulses n seen from the centres m, psi interpolated quadratically."""
+    """Gauss-Legendre over the curved source pulses n seen from the centres m, psi interpolated
+    quadratically."""
     xg, wg = gl
     h = 0.5 * c.ds[n][:, None]
     s = h * xg[None, :]
@@ -175,7 +205,8 @@ def _near(S, D, c, k, kx, ky, m, n, gl):
 
 
 def _self(S, D, c, k, kx, ky):
-    """Self pulses: log singularity of S subtracted with exact moments, D's regular parabola kernel."""
+    """Self pulses: log singularity of S subtracted with exact moments, D's regular parabola
+    kernel."""
     xg, wg = _GL8
     i = np.arange(c.size)
     h = 0.5 * c.ds[:, None]
@@ -188,7 +219,8 @@ def _self(S, D, c, k, kx, ky):
     if S is not None:
         smooth = -0.25j * (hankel2(0, k * rr) + 2j / np.pi * np.log(rr))
         _scatter(S, i, cols, lag, ww * smooth)
-        # -(j/4)(-2j/pi) ln|s| = -(1/(2 pi)) ln|s| against the quadratic: moments of ln|s| on (-h, h)
+        # -(j/4)(-2j/pi) ln|s| = -(1/(2 pi)) ln|s| against the quadratic: moments of ln|s| on (-h,
+        # h)
         hh = h[:, 0]
         mom0 = 2 * (hh * np.log(hh) - hh)
         mom2 = 2 * (hh**3 * np.log(hh) / 3 - hh**3 / 9)
@@ -242,13 +274,15 @@ def layer_matrices(c, k, *, single: bool = True, double: bool = True, band: floa
         for rows in jobs:
             _far_rows(S, D, c, k, rows)
     kx, ky = curvature(c)
-    # beyond ~30 pulses the midpoint rule with the end correction is accurate whatever the wavelength
+    # beyond ~30 pulses the midpoint rule with the end correction is accurate whatever the
+    # wavelength
     nb = int(np.clip(np.ceil(band * 2 * np.pi / abs(k) / np.median(c.ds)), 3, _MAX_BAND))
     m, n, off = _pairs(N, nb, c.closed)
     i = np.arange(N)
     # Euler-Maclaurin end correction of the midpoint rule where the far part meets the band: the far
-    # integral from the band edge a outwards misses -(h^2/24) f'(a) ~ (h/24) (f_1 - f_2) (first two pulses)
-    # (f'(a) from the quadratic through the first three far pulses: (-2 f_1 + 3 f_2 - f_3) / h)
+    # integral from the band edge a outwards misses -(h^2/24) f'(a) ~ (h/24) (f_1 - f_2) (first two
+    # pulses) (f'(a) from the quadratic through the first three far pulses: (-2 f_1 + 3 f_2 - f_3) /
+    # h)
     for o, factor in ((nb + 1, 1 + 2 / 24), (nb + 2, 1 - 3 / 24), (nb + 3, 1 + 1 / 24)):
         if (c.closed and 2 * (nb + 3) >= N) or o >= N:
             break
@@ -264,7 +298,7 @@ def layer_matrices(c, k, *, single: bool = True, double: bool = True, band: floa
     for sel, gl in ((close, _GL8), (~close, _GL4)):
         idx = np.flatnonzero(sel)
         for a in range(0, idx.size, 200000):
-            part = idx[a:a + 200000]
+            part = idx[a : a + 200000]
             _near(S, D, c, k, kx, ky, m[part], n[part], gl)
     _self(S, D, c, k, kx, ky)
     return S, D

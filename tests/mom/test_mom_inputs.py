@@ -1,11 +1,18 @@
-"""Issue 20, method of moments: bad input gives a ValueError naming the argument, and checkpoints refuse
-results computed from other inputs."""
+"""Issue 20, method of moments: bad input gives a ValueError naming the argument, and checkpoints
+refuse results computed from other inputs."""
 
 import numpy as np
 import pytest
 
-from scatterlab.mom import (PlaneWave, TaperedWave, correlation_length_for_slope, incoherent_scattering,
-                            rough_surface, solve, solve_tm)
+from scatterlab.mom import (
+    PlaneWave,
+    TaperedWave,
+    correlation_length_for_slope,
+    incoherent_scattering,
+    rough_surface,
+    solve,
+    solve_tm,
+)
 
 LAM = 1.0
 
@@ -73,15 +80,23 @@ def test_checkpoint_refuses_results_from_other_inputs(tmp_path):
     ti, ts = np.radians([20.0]), np.radians(np.linspace(-80, 80, 17))
     path = tmp_path / "mc.npz"
     first = incoherent_scattering(x, y, LAM, ti, ts, partitions=2, checkpoint=path)
-    again = incoherent_scattering(x, y, LAM, ti, ts, partitions=2, checkpoint=path)  # same inputs: reused
+    again = incoherent_scattering(
+        x, y, LAM, ti, ts, partitions=2, checkpoint=path
+    )  # same inputs: reused
     np.testing.assert_array_equal(again.mean, first.mean)
     x2, y2 = rough_surface(160, 0.1, 0.5, correlation_length_for_slope(0.5, 0.3), rng)
-    cases = {"theta_i": dict(theta_i=np.radians([30.0])), "theta_s": dict(theta_s=ts[::2]),
-             "surface": dict(y=y2), "points_per_partition": dict(partitions=1),
-             "polarization": dict(polarization="p"), "eta": dict(eta=1.5, polarization="s")}
+    cases = {
+        "theta_i": dict(theta_i=np.radians([30.0])),
+        "theta_s": dict(theta_s=ts[::2]),
+        "surface": dict(y=y2),
+        "points_per_partition": dict(partitions=1),
+        "polarization": dict(polarization="p"),
+        "eta": dict(eta=1.5, polarization="s"),
+    }
     for name, change in cases.items():
         args = dict(x=x, y=y, theta_i=ti, theta_s=ts, partitions=2) | change
         kw = {k: v for k, v in args.items() if k not in ("x", "y", "theta_i", "theta_s")}
         with pytest.raises(ValueError, match="checkpoint"):
-            incoherent_scattering(args["x"], args["y"], LAM, args["theta_i"], args["theta_s"], checkpoint=path,
-                                  **kw)
+            incoherent_scattering(
+                args["x"], args["y"], LAM, args["theta_i"], args["theta_s"], checkpoint=path, **kw
+            )
