@@ -283,5 +283,6 @@ def run(ctx):
         f"{s_imp['exact_seconds']:.1f} s. On a {cost['length_wavelengths']:.0f}-wavelength surface "
         "(10 points per wavelength, five incidences) the impedance condition costs "
         f"{cost['ratio_impedance_s_over_pec']:.2f}x (s) and "
-        f"{cost['ratio_impedance_p_over_pec']:.2f}x (p) the PEC solve (median of the repeats, one run)."
+        f"{cost['ratio_impedance_p_over_pec']:.2f}x (p) the PEC solve (median of the repeats, "
+        "one run)."
     )
