@@ -87,6 +87,12 @@ def contour(x, y, closed: bool = False) -> Contour:
         dx = np.gradient(x)
         dy = np.gradient(y)
     ds = np.hypot(dx, dy)
+    if closed:
+        step = np.hypot(np.roll(x, -1) - x, np.roll(y, -1) - y)
+        if np.any(step <= 1e-12 * np.max(step)) or np.any(ds <= 0):
+            bad = int(np.argmin(step))
+            raise ValueError(f"closed contour has coincident consecutive points (x, y) at index {bad}: "
+                             "points must be distinct (do not repeat the first point at the end)")
     tx, ty = dx / ds, dy / ds
     # open profile: conductor below, normal up = (-ty, tx); closed ccw body: outward = (ty, -tx)
     nx, ny = (ty, -tx) if closed else (-ty, tx)
@@ -195,16 +201,23 @@ def physical_optics_current(c: Contour, incidence, k: float) -> np.ndarray:
 
 @dataclass
 class Solution:
-    """Surface unknowns U = d psi / dn for one or several incidences.
+    """Surface unknowns for one or several incidences.
 
     Attributes
     ----------
     contour : Contour
-    k : float [rad/m]
-    current : ndarray (N,) or (N, K) -- U at the pulse centres (per incidence in columns).
+    k : float [rad/m] -- wavenumber above the surface (outside the body).
+    current : ndarray (N,) or (N, K) -- U = d psi / dn at the pulse centres (per incidence in columns), n out of
+        the lower medium; psi = E_z (s-pol) or H_z (p-pol). Zero for the p-pol perfect conductor.
     incidences : list
-    residual : ndarray (K,) -- relative residual ||A U - psi_inc|| / ||psi_inc|| of the solve.
+    residual : ndarray (K,) -- relative residual of the solve.
     timings : dict -- seconds for "fill" and "solve".
+    surface_field : ndarray like ``current`` or None -- psi on the surface (None: zero, the s-pol PEC).
+    polarization : "s" or "p"
+    eta : complex or None -- index of the lower medium (None: perfect conductor).
+    method : "exact" (two-medium) or "impedance" (Leontovich) for penetrable surfaces.
+    quadrature : "pulse" (staircase unknowns, Eq. 179: the far field integrates each pulse exactly) or
+        "smooth" (point values of a smooth field: the midpoint rule, as in :mod:`scatterlab.mom.kernels`).
     """
 
     contour: Contour
@@ -214,33 +227,110 @@ class Solution:
     residual: np.ndarray
     timings: dict = field(default_factory=dict)
     solver: str = "lu"
+    surface_field: np.ndarray | None = None
+    polarization: str = "s"
+    eta: complex | None = None
+    method: str = "exact"
+    quadrature: str = "pulse"
+
+    def _radiated(self, k, sx, sy, U, psi):
+        """sum_n [U_n - jk (n_n . r) psi_n] ds_n exp(jk r . r_n) sinc(...) for directions (sx, sy) (S, 1)."""
+        c = self.contour
+        phase = np.exp(1j * k * (sx * c.x[None, :] + sy * c.y[None, :]))
+        if self.quadrature == "pulse":
+            # exact integral of the plane-wave factor over each straight pulse (Eq. 181's integral over C'_n)
+            phase = phase * _sinc(k / 2 * (sx * c.tx[None, :] + sy * c.ty[None, :]) * c.ds[None, :])
+        U2 = U if U.ndim == 2 else U[:, None]
+        F = phase @ (U2 * c.ds[:, None])
+        if psi is not None:
+            P2 = psi if psi.ndim == 2 else psi[:, None]
+            F = F - (1j * k * (sx * c.nx[None, :] + sy * c.ny[None, :]) * phase) @ (P2 * c.ds[:, None])
+        return F if U.ndim == 2 else F[:, 0]
 
     def far_field(self, theta_s) -> np.ndarray:
-        """F(theta_s) (S,) or (S, K): sum_n U_n ds_n exp(jk(x_n sin + y_n cos)); theta_s [rad] from the vertical."""
-        th = np.atleast_1d(np.asarray(theta_s, float))
-        c = self.contour
-        sx, sy = np.sin(th)[:, None], np.cos(th)[:, None]
-        phase = np.exp(1j * self.k * (sx * c.x[None, :] + sy * c.y[None, :]))
-        # exact integral of the plane-wave factor over each straight pulse (Eq. 181's integral over C'_n)
-        phase = phase * _sinc(self.k / 2 * (sx * c.tx[None, :] + sy * c.ty[None, :]) * c.ds[None, :])
-        U = self.current if self.current.ndim == 2 else self.current[:, None]
-        F = phase @ (U * c.ds[:, None])
-        F = F if self.current.ndim == 2 else F[:, 0]
+        """F(theta_s) (S,) or (S, K): sum_n [U_n - jk (n_n . r) psi_n] ds_n exp(jk(x_n sin + y_n cos));
+        theta_s [rad] from the vertical (direction r = (sin, cos)); psi = 0 for the s-pol PEC (Eq. 181)."""
+        th = _angles(theta_s, "theta_s")
+        F = self._radiated(self.k, np.sin(th)[:, None], np.cos(th)[:, None], self.current, self.surface_field)
         return F if np.ndim(theta_s) else F[0]
 
     def echo_width(self, theta_s) -> np.ndarray:
         """2-D bistatic cross-section |F|^2 / (4k) [m] (closed bodies under a unit plane wave)."""
         return np.abs(self.far_field(theta_s)) ** 2 / (4 * self.k)
 
+    def _powers(self):
+        P = np.array([inc.incident_power(self.k) for inc in self.incidences])
+        return P if self.current.ndim == 2 else P[0]
+
     def scattering_coefficient(self, theta_s) -> np.ndarray:
         """|F|^2 / (8 pi k P_inc) [1/rad]: integrates to 1 over theta_s in (-90, 90) deg for a lossless surface.
 
         Needs tapered incidences (they carry a finite power).
         """
-        P = np.array([inc.incident_power(self.k) for inc in self.incidences])
-        F2 = np.abs(self.far_field(theta_s)) ** 2
-        P = P if self.current.ndim == 2 else P[0]
-        return F2 / (8 * np.pi * self.k * P)
+        if not self.contour.closed:
+            _angles(theta_s, "theta_s", np.pi / 2)
+        return np.abs(self.far_field(theta_s)) ** 2 / (8 * np.pi * self.k * self._powers())
+
+    def transmission_coefficient(self, theta_t) -> np.ndarray:
+        r"""Power per radian transmitted into a lossless lower medium, over the incident power [1/rad].
+
+        ``theta_t`` [rad] from the downward vertical, positive forward (direction (sin, -cos)). With
+        :math:`F_2 = \sum_n[\rho U_n - jk_2(\hat n_n\cdot\hat r)\psi_n]\Delta s_n e^{jk_2\hat r\cdot\mathbf r_n}`
+        (rho = 1 for s, eta^2 for p) the field below is
+        :math:`-\frac j4\sqrt{2/(\pi k_2\rho)}e^{-j(k_2\rho-\pi/4)}F_2`, and the power per angle is
+        :math:`|F_2|^2/(8\pi k_0)` (s) or :math:`|F_2|^2/(8\pi k_0 n^2)` (p, H_z carries Z_0/n) per unit
+        :math:`|\psi_{inc}|^2` flux. Scattering plus transmission integrates to 1 for a lossless interface.
+        Needs a penetrable open surface, a real index (no far field inside an absorber) and tapered incidences.
+        """
+        if self.eta is None or self.contour.closed or self.method != "exact":
+            raise ValueError("transmission_coefficient needs a penetrable open surface solved with "
+                             "method='exact' (eta given, closed=False)")
+        if np.imag(self.eta) != 0:
+            raise ValueError(f"transmission_coefficient needs a lossless lower medium (kappa = 0), got eta = "
+                             f"{self.eta}: the field decays inside an absorber and has no far field")
+        th = _angles(theta_t, "theta_t", np.pi / 2)
+        n2 = float(np.real(self.eta))
+        k2 = self.k * n2
+        rho = 1.0 if self.polarization == "s" else n2 * n2
+        F2 = self._radiated(k2, np.sin(th)[:, None], -np.cos(th)[:, None], rho * self.current,
+                            self.surface_field)
+        T = np.abs(F2) ** 2 / (8 * np.pi * self.k * (1.0 if self.polarization == "s" else n2 * n2))
+        T = T / self._powers()
+        return T if np.ndim(theta_t) else T[0]
+
+
+def _angles(theta, name, limit=np.pi):
+    """Angles [rad] as a 1-D array, finite and within [-limit, limit]."""
+    th = np.atleast_1d(np.asarray(theta, float))
+    if not np.all(np.isfinite(th)) or np.any(np.abs(th) > limit):
+        raise ValueError(f"{name} must be finite angles in [-{limit:.4g}, {limit:.4g}] rad (angles are in "
+                         "radians)")
+    return th
+
+
+def check_sampling(c: Contour, wavelength: float, min_ppw: float, where: str = "") -> None:
+    """Raise ValueError below ``min_ppw`` points per ``wavelength`` (longest pulse); warn below 8 (median).
+    ``where`` names the medium in the messages."""
+    import warnings
+
+    where = f" {where}" if where else ""
+    ppw = wavelength / np.max(c.ds)
+    if ppw < min_ppw:
+        raise ValueError(f"sampling of {ppw:.2f} points per wavelength{where} (longest pulse) is below "
+                         f"{min_ppw:g}: use a finer dx (at least 10 per wavelength recommended)")
+    typical = wavelength / np.median(c.ds)
+    if typical < 8:
+        warnings.warn(f"only {typical:.1f} points per wavelength{where} (median pulse): expect errors of "
+                      "several percent", stacklevel=3)
+
+
+def check_incidences(incs, c: Contour, k: float) -> None:
+    """Validate each incidence against the contour (taper width and position, angle from above)."""
+    length = (c.x[-1] - c.x[0]) * c.size / (c.size - 1) if not c.closed else None  # N pulses of dx
+    extent = None if c.closed else (c.x[0], c.x[-1], c.size)
+    for inc in incs:
+        if hasattr(inc, "check"):
+            inc.check(k, length, extent)
 
 
 def solve_tm(x, y, wavelength, incidence, closed: bool = False, *, solver: str = "lu", tol: float = 1e-6,
@@ -271,19 +361,9 @@ def solve_tm(x, y, wavelength, incidence, closed: bool = False, *, solver: str =
     wavelength = float(as_positive(wavelength, "wavelength"))
     k = 2 * np.pi / wavelength
     c = contour(x, y, closed)
-    ppw = wavelength / np.max(c.ds)
-    if ppw < min_points_per_wavelength:
-        raise ValueError(f"sampling of {ppw:.2f} points per wavelength (longest pulse) is below "
-                         f"{min_points_per_wavelength:g}: use a finer dx (at least 10 per wavelength recommended)")
-    typical = wavelength / np.median(c.ds)
-    if typical < 8:
-        warnings.warn(f"only {typical:.1f} points per wavelength (median pulse): expect errors of several percent",
-                      stacklevel=2)
+    check_sampling(c, wavelength, min_points_per_wavelength)
     incs = list(incidence) if isinstance(incidence, (list, tuple)) else [incidence]
-    length = (c.x[-1] - c.x[0]) * c.size / (c.size - 1) if not closed else None  # N pulses of dx
-    for inc in incs:
-        if hasattr(inc, "check"):
-            inc.check(k, length)
+    check_incidences(incs, c, k)
     t0 = time.perf_counter()
     A = impedance_matrix(c, k)
     t_fill = time.perf_counter() - t0

@@ -6,28 +6,37 @@ factorisation serve every incidence angle (multiple right-hand sides, Thorsos ta
 partition); the scattering coefficients are averaged and their standard error per angle reported. The
 coherent part :math:`|\\langle F\\rangle|^2` (phases referred to each taper's centre) is separated from the
 incoherent one. Partitions run through an executor of :mod:`scatterlab.runtime`; with ``checkpoint`` the
-finished partitions are saved atomically (npz) and a rerun resumes after the last one saved.
+finished partitions are saved atomically (npz) with the inputs they were computed from (angles, wavelength,
+taper, partition size, polarization, eta, method, and a SHA-256 digest of each partition's profile), and a
+rerun resumes after the last one saved -- or refuses with a ValueError when any of these differ.
+Both polarizations and real materials go through :func:`~scatterlab.mom.solve` (``polarization``, ``eta``).
 """
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from scatterlab.mom.efie import solve_tm
+from scatterlab.mom.formulations import solve
 from scatterlab.mom.incidence import TaperedWave
 from scatterlab.runtime.results import write_npz
 
-__all__ = ["incoherent_scattering", "IncoherentResult", "partition_task"]
+__all__ = ["incoherent_scattering", "IncoherentResult", "partition_task", "surface_digest"]
 
 _ENERGY_NODES = np.polynomial.legendre.leggauss(1024)
 
 
 @dataclass
 class IncoherentResult:
-    """Averages over partitions: theta_i (I,), theta_s (S,) [rad]; arrays (I, S) [1/rad]."""
+    """Averages over partitions: theta_i (I,), theta_s (S,) [rad]; arrays (I, S) [1/rad].
+
+    ``energy`` (P, I) is each partition's reflected power (the coefficient integrated over theta_s);
+    ``transmitted`` (P, I) the power into a lossless lower medium (NaN where undefined: PEC, absorbing or
+    impedance-condition surfaces).
+    """
 
     theta_i: np.ndarray
     theta_s: np.ndarray
@@ -39,15 +48,19 @@ class IncoherentResult:
     partitions: int
     seconds_fill: float
     seconds_solve: float
+    transmitted: np.ndarray | None = None
+    polarization: str = "s"
+    eta: complex | None = None
 
 
 def partition_task(task):
-    """Solve one partition for all incidences: returns (coefficient (I, S), far field (S, I), energy (I,), times)."""
-    x, y, wavelength, theta_i, g, theta_s, solver = task
+    """Solve one partition for all incidences: returns (coefficient (I, S), far field (S, I), energy (I,),
+    fill and solve seconds, transmitted energy (I,))."""
+    x, y, wavelength, theta_i, g, theta_s, solver, polarization, eta, method = task
     k = 2 * np.pi / wavelength
     x0 = 0.5 * (x[0] + x[-1])
     incs = [TaperedWave(t, g, x0=x0) for t in theta_i]
-    sol = solve_tm(x, y, wavelength, incs, solver=solver)
+    sol = solve(x, y, wavelength, incs, solver=solver, polarization=polarization, eta=eta, method=method)
     F = sol.far_field(theta_s)  # (S, I)
     P = np.array([inc.incident_power(k) for inc in incs])
     coef = (np.abs(F) ** 2 / (8 * np.pi * k * P)).T
@@ -55,24 +68,79 @@ def partition_task(task):
     xg, wg = _ENERGY_NODES
     Fq = sol.far_field(xg * np.pi / 2)
     energy = np.sum(wg[:, None] * np.abs(Fq) ** 2, 0) * (np.pi / 2) / (8 * np.pi * k * P)
-    return coef, F, energy, sol.timings["fill"], sol.timings["solve"]
+    trans = np.full(len(incs), np.nan)
+    if eta is not None and method == "exact" and np.imag(eta) == 0:
+        trans = np.sum(wg[:, None] * sol.transmission_coefficient(xg * np.pi / 2), 0) * (np.pi / 2)
+    return coef, F, energy, sol.timings["fill"], sol.timings["solve"], trans
+
+
+def surface_digest(x, y) -> str:
+    """SHA-256 of a profile's float64 bytes (identifies a partition in a checkpoint)."""
+    h = hashlib.sha256(np.ascontiguousarray(x, float).tobytes())
+    h.update(np.ascontiguousarray(y, float).tobytes())
+    return h.hexdigest()
+
+
+def _settings(wavelength, theta_i, theta_s, g, n, polarization, eta, method):
+    """The inputs every partition shares, as arrays for the checkpoint (compared on resume)."""
+    return {"wavelength": np.array(float(wavelength)), "theta_i": theta_i, "theta_s": theta_s,
+            "g": np.array(float(g)), "points_per_partition": np.array(n), "polarization": np.array(polarization),
+            "eta": np.array(complex(np.nan) if eta is None else complex(eta)), "method": np.array(method)}
+
+
+def _load_checkpoint(path, settings, digests):
+    """Finished partitions of a checkpoint, after checking they come from the same inputs."""
+    z = np.load(path)
+    if "digest" not in z.files:
+        raise ValueError(f"checkpoint {path} carries no digest of its inputs (written by an older version): "
+                         "delete it or pass another checkpoint path")
+    for key, value in settings.items():
+        old = z[key]
+        same = old.shape == value.shape and (np.array_equal(old, value, equal_nan=True) if old.dtype.kind in
+                                             "fc" else np.array_equal(old, value))
+        if not same:
+            raise ValueError(f"checkpoint {path} was written for another {key} ({old!r}, now {value!r}): delete it "
+                             "or pass another checkpoint path")
+    done = {}
+    for p in range(int(z["count"])):
+        if p >= len(digests) or str(z["digest"][p]) != digests[p]:
+            raise ValueError(f"checkpoint {path}: partition {p} was computed on another surface (its digest "
+                             "differs): delete the checkpoint or pass another path")
+        trans = z["transmitted"][p]
+        done[p] = (z["coef"][p], z["F"][p], z["energy"][p], float(z["fill"][p]), float(z["solve"][p]), trans)
+    return done
+
+
+def _check_angles(theta_i, theta_s):
+    theta_i = np.atleast_1d(np.asarray(theta_i, float))
+    theta_s = np.atleast_1d(np.asarray(theta_s, float))
+    if not np.all(np.isfinite(theta_i)) or np.any(np.abs(theta_i) >= np.pi / 2):
+        raise ValueError("theta_i must be finite incidence angles in (-pi/2, pi/2) rad")
+    if not np.all(np.isfinite(theta_s)) or np.any(np.abs(theta_s) > np.pi / 2):
+        raise ValueError("theta_s must be finite scattering angles in [-pi/2, pi/2] rad")
+    return theta_i, theta_s
 
 
 def incoherent_scattering(x, y, wavelength, theta_i, theta_s, *, partitions: int, g=None, solver: str = "lu",
-                          executor=None, checkpoint=None) -> IncoherentResult:
+                          executor=None, checkpoint=None, polarization: str = "s", eta=None,
+                          method: str = "exact") -> IncoherentResult:
     """Average the scattering coefficient over ``partitions`` equal pieces of the profile (x, y).
 
     Parameters
     ----------
     x, y : array (N,) [m] -- one long surface (e.g. from :func:`~scatterlab.mom.rough_surface`).
     wavelength : float [m]
-    theta_i : array (I,) [rad] -- incidence angles, all solved with one factorisation per partition.
-    theta_s : array (S,) [rad] -- scattering angles from the vertical, specular at theta_s = theta_i.
+    theta_i : array (I,) [rad] -- incidence angles in (-pi/2, pi/2), all solved with one factorisation per
+        partition.
+    theta_s : array (S,) [rad] -- scattering angles in [-pi/2, pi/2] from the vertical, specular at theta_i.
     partitions : int -- the profile is cut into this many pieces of N // partitions points.
     g : float [m], optional -- taper width; default a quarter of a partition.
     solver : "lu" or "fb"
     executor : a :mod:`scatterlab.runtime` executor (default serial).
-    checkpoint : path, optional -- npz of finished partitions; an existing file is resumed.
+    checkpoint : path, optional -- npz of finished partitions; an existing file is resumed. It records the
+        shared inputs (wavelength, angles, taper, partition size, polarization, eta, method) and a SHA-256
+        digest of each partition's profile; any mismatch raises ValueError instead of reusing old results.
+    polarization, eta, method : as :func:`~scatterlab.mom.solve` ("s"/"p"; None is a perfect conductor).
     """
     from scatterlab.runtime import get_executor
 
@@ -80,19 +148,17 @@ def incoherent_scattering(x, y, wavelength, theta_i, theta_s, *, partitions: int
     y = np.asarray(y, float)
     if partitions < 1 or x.size // partitions < 16:
         raise ValueError("partitions must be >= 1 and leave at least 16 points per partition")
-    theta_i = np.atleast_1d(np.asarray(theta_i, float))
-    theta_s = np.atleast_1d(np.asarray(theta_s, float))
+    theta_i, theta_s = _check_angles(theta_i, theta_s)
     n = x.size // partitions
     dx = x[1] - x[0]
     g = n * dx / 4 if g is None else float(g)
-    tasks = [(x[p * n:(p + 1) * n], y[p * n:(p + 1) * n], wavelength, theta_i, g, theta_s, solver)
-             for p in range(partitions)]
-    done: dict[int, tuple] = {}
+    eta = None if eta is None else complex(eta)
+    tasks = [(x[p * n:(p + 1) * n], y[p * n:(p + 1) * n], wavelength, theta_i, g, theta_s, solver,
+              polarization, eta, method) for p in range(partitions)]
+    digests = [surface_digest(t[0], t[1]) for t in tasks]
+    settings = _settings(wavelength, theta_i, theta_s, g, n, polarization, eta, method)
     ckpt = Path(checkpoint) if checkpoint is not None else None
-    if ckpt is not None and ckpt.exists():
-        z = np.load(ckpt)
-        for p in range(int(z["count"])):
-            done[p] = (z["coef"][p], z["F"][p], z["energy"][p], float(z["fill"][p]), float(z["solve"][p]))
+    done = _load_checkpoint(ckpt, settings, digests) if ckpt is not None and ckpt.exists() else {}
     ex = executor if executor is not None else get_executor("serial")
     todo = [p for p in range(partitions) if p not in done]
     # in chunks, so a checkpoint is written every few partitions
@@ -102,14 +168,23 @@ def incoherent_scattering(x, y, wavelength, theta_i, theta_s, *, partitions: int
         for p, r in zip(ids, ex.map(partition_task, [tasks[p] for p in ids], desc="MoM partitions")):
             done[p] = r
         if ckpt is not None:
-            count = 0
-            while count in done:
-                count += 1
-            keys = range(count)
-            write_npz(ckpt, overwrite=True, count=np.array(count),
-                      coef=np.stack([done[p][0] for p in keys]), F=np.stack([done[p][1] for p in keys]),
-                      energy=np.stack([done[p][2] for p in keys]), fill=np.array([done[p][3] for p in keys]),
-                      solve=np.array([done[p][4] for p in keys]))
+            _save_checkpoint(ckpt, done, digests, settings)
+    return _average(done, partitions, theta_i, theta_s, wavelength, g, polarization, eta)
+
+
+def _save_checkpoint(ckpt, done, digests, settings):
+    count = 0
+    while count in done:
+        count += 1
+    keys = range(count)
+    write_npz(ckpt, overwrite=True, count=np.array(count), digest=np.array(digests[:count]),
+              coef=np.stack([done[p][0] for p in keys]), F=np.stack([done[p][1] for p in keys]),
+              energy=np.stack([done[p][2] for p in keys]), fill=np.array([done[p][3] for p in keys]),
+              solve=np.array([done[p][4] for p in keys]), transmitted=np.stack([done[p][5] for p in keys]),
+              **settings)
+
+
+def _average(done, partitions, theta_i, theta_s, wavelength, g, polarization, eta):
     coef = np.stack([done[p][0] for p in range(partitions)])      # (P, I, S)
     F = np.stack([done[p][1] for p in range(partitions)])         # (P, S, I)
     k = 2 * np.pi / wavelength
@@ -120,4 +195,6 @@ def incoherent_scattering(x, y, wavelength, theta_i, theta_s, *, partitions: int
     return IncoherentResult(theta_i=theta_i, theta_s=theta_s, mean=mean, stderr=stderr, coherent=coherent,
                             incoherent=mean - coherent, energy=np.stack([done[p][2] for p in range(partitions)]),
                             partitions=partitions, seconds_fill=float(sum(done[p][3] for p in range(partitions))),
-                            seconds_solve=float(sum(done[p][4] for p in range(partitions))))
+                            seconds_solve=float(sum(done[p][4] for p in range(partitions))),
+                            transmitted=np.stack([done[p][5] for p in range(partitions)]),
+                            polarization=polarization, eta=eta)

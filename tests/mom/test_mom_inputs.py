@@ -1,0 +1,102 @@
+"""Issue 20, method of moments: bad input gives a ValueError naming the argument, and checkpoints
+refuse results computed from other inputs."""
+
+import numpy as np
+import pytest
+
+from scatterlab.mom import (
+    PlaneWave,
+    TaperedWave,
+    correlation_length_for_slope,
+    incoherent_scattering,
+    rough_surface,
+    solve,
+    solve_tm,
+)
+
+LAM = 1.0
+
+
+def flat(n=400, dx=0.1):
+    return (np.arange(n) - n / 2) * dx, np.zeros(n)
+
+
+def test_tapered_wave_rejects_nan_and_off_surface_centres():
+    with pytest.raises(ValueError, match="x0"):
+        TaperedWave(0.3, 15.0, x0=np.nan)
+    with pytest.raises(ValueError, match="g"):
+        TaperedWave(0.3, np.nan)
+    with pytest.raises(ValueError, match="theta"):
+        TaperedWave(np.nan, 15.0)
+    x, y = flat()
+    with pytest.raises(ValueError, match="off the surface"):
+        solve_tm(x, y, LAM, TaperedWave(0.3, 10.0, x0=500.0))
+    with pytest.raises(ValueError, match="x0"):  # on the surface but the taper cut by its end
+        solve_tm(x, y, LAM, TaperedWave(0.3, 10.0, x0=15.0))
+    sol = solve_tm(x, y, LAM, TaperedWave(0.3, 10.0, x0=0.0))  # centred: accepted
+    assert np.all(np.isfinite(sol.current))
+
+
+def test_plane_wave_rejects_nan_and_names_the_problem_on_open_surfaces():
+    with pytest.raises(ValueError, match="theta"):
+        PlaneWave(np.nan)
+    x, y = flat()
+    with pytest.raises(ValueError, match="theta"):
+        solve_tm(x, y, LAM, PlaneWave(2.0))  # from below an open surface
+    sol = solve_tm(x, y, LAM, PlaneWave(0.3))
+    with pytest.raises(ValueError, match="TaperedWave"):  # was an AttributeError
+        sol.scattering_coefficient(0.3)
+
+
+def test_scattering_angles_must_be_finite_and_in_range():
+    x, y = flat()
+    sol = solve(x, y, LAM, TaperedWave(0.3, 10.0), polarization="p")
+    for bad in (np.nan, np.inf, 2.0):
+        with pytest.raises(ValueError, match="theta_s"):
+            sol.scattering_coefficient(bad)
+    with pytest.raises(ValueError, match="theta_s"):
+        sol.far_field(np.nan)
+    xs, ys = rough_surface(240, 0.1, 0.5, correlation_length_for_slope(0.5, 0.3), 4)
+    with pytest.raises(ValueError, match="theta_s"):
+        incoherent_scattering(xs, ys, LAM, [0.3], [0.1, np.nan], partitions=2)
+    with pytest.raises(ValueError, match="theta_s"):
+        incoherent_scattering(xs, ys, LAM, [0.3], [0.1, 1.7], partitions=2)
+    with pytest.raises(ValueError, match="theta_i"):
+        incoherent_scattering(xs, ys, LAM, [np.nan], [0.1], partitions=2)
+
+
+def test_closed_contour_with_coincident_points_is_refused():
+    t = 2 * np.pi * np.arange(64) / 64
+    x, y = np.cos(t), np.sin(t)
+    x, y = np.append(x, x[0]), np.append(y, y[0])  # the first point repeated at the end
+    for pol in ("s", "p"):
+        with pytest.raises(ValueError, match="coincident"):
+            solve(x, y, LAM, PlaneWave(0.0), closed=True, polarization=pol)
+
+
+def test_checkpoint_refuses_results_from_other_inputs(tmp_path):
+    rng = np.random.default_rng(4)
+    x, y = rough_surface(160, 0.1, 0.5, correlation_length_for_slope(0.5, 0.3), rng)
+    ti, ts = np.radians([20.0]), np.radians(np.linspace(-80, 80, 17))
+    path = tmp_path / "mc.npz"
+    first = incoherent_scattering(x, y, LAM, ti, ts, partitions=2, checkpoint=path)
+    again = incoherent_scattering(
+        x, y, LAM, ti, ts, partitions=2, checkpoint=path
+    )  # same inputs: reused
+    np.testing.assert_array_equal(again.mean, first.mean)
+    x2, y2 = rough_surface(160, 0.1, 0.5, correlation_length_for_slope(0.5, 0.3), rng)
+    cases = {
+        "theta_i": dict(theta_i=np.radians([30.0])),
+        "theta_s": dict(theta_s=ts[::2]),
+        "surface": dict(y=y2),
+        "points_per_partition": dict(partitions=1),
+        "polarization": dict(polarization="p"),
+        "eta": dict(eta=1.5, polarization="s"),
+    }
+    for name, change in cases.items():
+        args = dict(x=x, y=y, theta_i=ti, theta_s=ts, partitions=2) | change
+        kw = {k: v for k, v in args.items() if k not in ("x", "y", "theta_i", "theta_s")}
+        with pytest.raises(ValueError, match="checkpoint"):
+            incoherent_scattering(
+                args["x"], args["y"], LAM, args["theta_i"], args["theta_s"], checkpoint=path, **kw
+            )
