@@ -10,16 +10,13 @@ of rms slope 0.1 and 0.3, averaged over realizations; the energy check R + T = 1
 alongside.
 """
 
-import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parent))
-from _common import plt  # noqa: E402
+from scatterlab.studies._common import plt
 
-from scatterlab.fresnel import reflectances  # noqa: E402
-from scatterlab.mom import TaperedWave, correlation_length_for_slope, rough_surface, solve  # noqa: E402
+from scatterlab.fresnel import reflectances
+from scatterlab.mom import TaperedWave, correlation_length_for_slope, rough_surface, solve
 
 STUDY = {
     "id": "mom_brewster_rough",

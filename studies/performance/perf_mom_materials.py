@@ -11,20 +11,17 @@
 (e) cost growth with N for LU and forward-backward (p-pol PEC, glass).
 """
 
-import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).parents[1]))
-from _common import plt  # noqa: E402
+from scatterlab.studies._common import plt
 
 from scatterlab.mom import (
     PlaneWave,
     TaperedWave,
-    correlation_length_for_slope,  # noqa: E402
+    correlation_length_for_slope,
     cylinder_echo_width,
     rough_surface,
     solve,
