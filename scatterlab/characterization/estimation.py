@@ -34,6 +34,7 @@ __all__ = ["RegionData", "RegionEstimate", "PixelMaps", "region_masks", "region_
            "region_posteriors", "default_margin"]
 
 PARAMS = ("n", "kappa")
+PIXEL_DOLP_MARGIN = 0.05  # per-pixel DOLP beyond [-0.05, 1.05] is treated as undefined
 
 
 @dataclass
@@ -144,10 +145,28 @@ def region_data(name, stack, labels, interior, margin, thetas, truth=None) -> Re
 
 
 def pixel_maps(stack, thetas, sigma) -> PixelMaps:
-    """Per-pixel n and kappa from a DOLP stack ``(M, H, W)`` at specular geometries ``thetas`` [rad]."""
+    """Per-pixel n and kappa from a DOLP stack at specular geometries.
+
+    Parameters
+    ----------
+    stack : ndarray, shape (M, H, W)
+        Registered DOLP per geometry (NaN where undefined; values beyond ``[-0.05, 1.05]`` are treated as
+        undefined).
+    thetas : ndarray, shape (M,)
+        Specular angles [rad].
+    sigma : float
+        Known roughness.
+
+    Returns
+    -------
+    PixelMaps
+    """
     from scatterlab.inversion import fit_dolp
 
-    fit = fit_dolp(np.moveaxis(stack, 0, -1), thetas, thetas, sigma=sigma)
+    # a DOLP far outside [0, 1] is a dark pixel's noise, not a measurement: undefined (NaN), as the
+    # convention for zero light says; fit_dolp masks NaN entries
+    y = np.where((stack >= -PIXEL_DOLP_MARGIN) & (stack <= 1 + PIXEL_DOLP_MARGIN), stack, np.nan)
+    fit = fit_dolp(np.moveaxis(y, 0, -1), thetas, thetas, sigma=sigma)
     return PixelMaps(fit.n, fit.kappa, fit.errors)
 
 
