@@ -180,7 +180,8 @@ def analyze(dataset, out, *, settings: AnalyzeSettings = AnalyzeSettings(), over
     if not regions:
         raise ValueError("no region of either material is large enough for an estimate: " + "; ".join(missing))
     psfs = [resample_psf(r.psf, shape) if settings.psf == "blind" else a.psf_true for r, a in zip(rests, acqs)]
-    bias = restoration_bias(regions, layout, thetas, psfs, cfg, rng, sel, margin, executor=executor)
+    bias = restoration_bias(regions, layout, thetas, psfs, cfg, rng, sel, margin,
+                            blind=settings.psf == "blind", executor=executor)
     regions = [bias_corrected(r, bias[r.name]) for r in regions]
     estimates = region_posteriors(regions, thetas, settings.sigma, rng, n_steps=settings.posterior_steps,
                                   executor=executor)

@@ -85,7 +85,8 @@ def _self_calibrated(result, case, kind, regions, thetas, cfg, rng, sel, margin,
     shape = result.labels.shape
     psfs = [None if case == "no_turbulence" else resample_psf(o.restorations[(case, kind)].psf, shape)
             for o in obs]
-    bias = restoration_bias(regions, layout, thetas, psfs, cfg, rng, sel, margin, executor=executor)
+    bias = restoration_bias(regions, layout, thetas, psfs, cfg, rng, sel, margin,
+                            blind=case != "no_turbulence", executor=executor)
     return [bias_corrected(r, bias[r.name]) for r in regions]
 
 

@@ -9,11 +9,12 @@ that is the same for every noise realization, so no noise term can cover it.
 The bias depends on the scene's layout and contrast, which the data show, so it is measured on a copy of the
 scene as estimated: the classification gives the layout (metal vs dielectric), a least-squares fit to the
 uncorrected region means gives each region's material, and that synthetic plate is imaged through the same
-PSF (the known one, or the deconvolution's estimate for a corrected image), without noise, restored with the
-known PSF and registered like the data. The bias of each region and geometry is the re-simulated region mean
+PSF (the known one, or the deconvolution's estimate for a corrected image), without noise, restored as the
+data were (with the known PSF, or blindly from a new random start PSF -- a parametric bootstrap of the
+whole blind restoration, PSF error included) and registered like the data. The bias of each region and geometry is the re-simulated region mean
 minus the synthetic truth; it is subtracted from the data, and half of it is kept as a systematic error
-(the re-simulated scene is not the true one). What it does not see -- the error of a blind PSF estimate
-itself -- is left to the inferred noise term of the posterior.
+(the re-simulated scene is not the true one). What it does not see (the scene's own details, the random
+start of one blind run) is left to the inferred noise term of the posterior.
 """
 
 from __future__ import annotations
@@ -48,16 +49,20 @@ def estimated_plate(regions, thetas, sigma) -> Plate:
 
 
 def _resimulate_task(task):
-    """Module-level (process executors): image, restore with the known PSF and register one geometry."""
-    plate, labels, theta, psf, cfg, seed = task
+    """Module-level (process executors): image, restore as the data were restored (known PSF, or blindly from
+    a random start PSF) and register one geometry."""
+    plate, labels, theta, psf, blind, cfg, seed = task
     rng = np.random.default_rng(seed)
-    acq = acquire(plate, labels, theta, "resimulation", None, cfg, rng, Ideal(noise=True), psf=psf)
-    rest = restore(acq, RestoreSettings(cfg.iterations, cfg.psf_model, None, True, None), seed, Ideal(psf=True))
+    acq = acquire(plate, labels, theta, "resimulation", float("nan") if blind else None, cfg, rng,
+                  Ideal(noise=True), psf=psf)
+    settings = RestoreSettings(cfg.iterations, cfg.psf_model, None, True, None)
+    rest = restore(acq, settings, seed, Ideal(psf=not blind))
     reg = register_restoration(rest, theta, None, foreshortened=acq.foreshortened)
     return reg.dolp, acq.truth_dolp
 
 
-def restoration_bias(regions, class_map, thetas, psfs, cfg, rng, interior, margin, *, executor=None) -> dict:
+def restoration_bias(regions, class_map, thetas, psfs, cfg, rng, interior, margin, *, blind=False,
+                     executor=None) -> dict:
     """Re-simulated bias of each region's mean DOLP per geometry.
 
     Parameters
@@ -76,6 +81,9 @@ def restoration_bias(regions, class_map, thetas, psfs, cfg, rng, interior, margi
         Pixels scored.
     margin : int
         Region erosion [pixels].
+    blind : bool
+        Restore the re-simulated images blindly, as the data were (then the bias includes the error of the
+        blind PSF estimate); otherwise with the PSF known.
     executor : optional
 
     Returns
@@ -87,7 +95,7 @@ def restoration_bias(regions, class_map, thetas, psfs, cfg, rng, interior, margi
 
     plate = estimated_plate(regions, thetas, cfg.sigma_known)
     labels = (np.asarray(class_map) > 0).astype(int)
-    tasks = [(plate, labels, th, psf, cfg, int(rng.integers(2**63))) for th, psf in zip(thetas, psfs)]
+    tasks = [(plate, labels, th, psf, blind, cfg, int(rng.integers(2**63))) for th, psf in zip(thetas, psfs)]
     ex = executor if executor is not None else get_executor("serial")
     out = ex.map(_resimulate_task, tasks, desc="self-calibration")
     stack = np.stack([d for d, _ in out])
