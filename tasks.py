@@ -2,7 +2,7 @@
 """The two set-up commands of the README.
 
     python3 tasks.py demo   # main job: create .venv, install scatterlab, run the default characterization
-    python3 tasks.py test   # tests:    create .venv, install scatterlab[test], run pytest
+    python3 tasks.py test   # tests:    create .venv, install scatterlab[test], run ruff and pytest
 
 Each creates the virtual environment ``.venv`` beside this file when missing and
 (re)installs only when ``pyproject.toml`` changed since the last install, so a
@@ -54,8 +54,13 @@ def demo(args) -> int:
 
 
 def test(args) -> int:
+    """ruff (lint, then the format check) before pytest; the first failure stops."""
     ensure_env("test")
     env = dict(os.environ, MPLBACKEND="Agg", SCATTERLAB_PROGRESS="0")
+    for check in (("check", "."), ("format", "--check", ".")):
+        if _run(BIN / "ruff", *check) != 0:
+            print(f"ruff {check[0]} failed: run `.venv/bin/ruff {' '.join(check)}` (format: `ruff format .`)")
+            return 1
     return _run(PY, "-m", "pytest", "-q", *args, env=env)
 
 
