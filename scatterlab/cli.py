@@ -38,6 +38,9 @@ def _study(args) -> int:
         for sid, st in studies.discover().items():
             print(f"{sid:24s} {st.title}  [{st.reproduces}]")
         return 0
+    if args.seed is not None and args.seed < 0:
+        print(f"scatterlab: --seed must be a non-negative integer, got {args.seed}", file=sys.stderr)
+        return 2
     if not args.id:
         print("scatterlab study run: give a study ID or 'all'", file=sys.stderr)
         return 2

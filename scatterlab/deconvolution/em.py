@@ -174,6 +174,17 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
         raise ValueError(f"psf_mode must be 'em', 'pupil' or 'fixed', got {psf_mode!r}")
     if boundary not in ("reeves", "periodic"):
         raise ValueError(f"boundary must be 'reeves' or 'periodic', got {boundary!r}")
+    if np.any(np.abs(th) > 2 * np.pi):
+        raise ValueError(f"angles must be polarizer angles in radians, got values up to {np.abs(th).max():g} "
+                         "(degrees? use numpy.radians)")
+    if not (np.isfinite(prior_weight) and prior_weight >= 0):
+        raise ValueError(f"prior_weight must be finite and >= 0, got {prior_weight!r}")
+    if psf_radius is not None and not (np.isfinite(psf_radius) and psf_radius >= 1):
+        raise ValueError(f"psf_radius must be >= 1 pixel, got {psf_radius!r}")
+    if psf0 is not None:
+        p0 = np.asarray(psf0, float)
+        if not np.all(np.isfinite(p0)) or np.any(p0 < 0) or not np.all(p0.sum(axis=(-2, -1)) > 0):
+            raise ValueError("psf0 must be finite and non-negative with a positive sum (a PSF)")
     if psf_mode == "fixed" and psf0 is None:
         raise ValueError("psf_mode='fixed' needs psf0")
     if psf_mode == "pupil" and pupil is None:
@@ -183,6 +194,8 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
         notes.append("polarizer angles are not evenly spaced: the S0/DOLP updates are generalised-EM steps "
                      "(coupled updates of Sec. 3.3.2)")
     d = np.clip(d, 0.0, None)
+    if not d.sum() > 0:
+        raise ValueError("data holds no photons (every count is <= 0): nothing to deconvolve")
     valid = np.ones(d.shape[1:], bool)
     if mask is not None:
         m = np.asarray(mask)

@@ -41,11 +41,21 @@ class SuperGaussianPrior:
     def __post_init__(self):
         if self.m < 2 or self.m % 2:
             raise ValueError(f"m must be an even integer >= 2, got {self.m}")
-        if not self.c2 > 0:
-            raise ValueError("c2 must be > 0")
+        if not (np.isfinite(self.c2) and self.c2 > 0):
+            raise ValueError(f"c2 must be finite and > 0, got {self.c2!r}")
+        if not (np.isfinite(self.c3) and 0 <= self.c3 <= 1):
+            raise ValueError(f"c3 (the prior's centre DOLP) must be in [0, 1], got {self.c3!r}")
+        if self.m * np.log10(self.c2) > 300:
+            raise ValueError(f"c2^m = {self.c2:g}^{self.m} overflows (must be <= 1e300)")
 
     def log_pdf(self, P):
-        return -(self.c2 * (np.asarray(P, float) - self.c3)) ** self.m
+        """``-[c2 (P - c3)]^m`` (Eq. 195, c1 = 1), evaluated in logs so that huge c2^m never overflows: far
+        from the centre it is a large finite negative number (floored at -1e300), never -inf or NaN for a
+        finite P."""
+        x = np.abs(self.c2 * (np.asarray(P, float) - self.c3))
+        with np.errstate(divide="ignore"):
+            logx = np.log(x)
+        return -np.exp(np.minimum(self.m * logx, np.log(1e300)))
 
 
 PRIOR_SETS = {
@@ -167,6 +177,9 @@ def dolp_update_companion(T, Q, prior: SuperGaussianPrior, weight: float = 1.0) 
     from numpy.polynomial import polynomial as Pn
 
     m, c3 = prior.m, prior.c3
+    T, Q = float(np.squeeze(T)), float(np.squeeze(Q))
+    if not (T > 0 and 0 <= Q <= T):
+        raise ValueError(f"need T > 0 and 0 <= Q <= T (a DOLP q = Q/T in [0, 1]), got T={T}, Q={Q}")
     a = weight * m * prior.c2**m / T
     # a P (P - 1) (P - c3)^(m-1) - P + q, coefficients in increasing powers
     poly = Pn.polymul(Pn.polymul([0, 1], [-1, 1]), Pn.polypow([-c3, 1], m - 1)) * a

@@ -86,8 +86,12 @@ def detect(channels, rng=None, *, photons: float, read_noise: float = 0.0, dark_
     I = as_finite(channels, "channels")
     if np.any(I < 0):
         raise ValueError("channels must be non-negative intensities")
-    if photons <= 0 or read_noise < 0 or dark_current < 0:
-        raise ValueError("photons must be > 0; read_noise and dark_current must be >= 0")
+    for name, v, lo in (("photons", photons, "> 0"), ("read_noise", read_noise, ">= 0"),
+                        ("dark_current", dark_current, ">= 0")):
+        if not (np.isfinite(v) and (v > 0 if lo == "> 0" else v >= 0)):
+            raise ValueError(f"{name} must be finite and {lo} [e-], got {v!r}")
+    if scale is not None and not (np.isfinite(scale) and scale > 0):
+        raise ValueError(f"scale (the intensity that gives `photons`) must be finite and > 0, got {scale!r}")
     rng = np.random.default_rng(rng)
     scale = float(I.max()) if scale is None else float(scale)
     expected = photons * I / scale if scale > 0 else np.zeros_like(I)

@@ -54,6 +54,8 @@ def psf(pupil, phase=None, pad: int = 2) -> np.ndarray:
     pupil = as_finite(pupil, "pupil")
     if pad < 2:
         raise ValueError("pad must be >= 2 for a Nyquist-sampled PSF")
+    if not np.all(np.any(pupil != 0, axis=(-2, -1))):
+        raise ValueError("pupil must transmit light (it is zero everywhere): the PSF would be undefined")
     field = pupil.astype(complex) if phase is None else pupil * np.exp(1j * as_finite(phase, "phase"))
     n = pupil.shape[-1]
     m = pad * n

@@ -117,6 +117,9 @@ def rytov_variance_from_r0(r0, path_length, wavelength):
     return _weak_check(2.91 * (L / (k * r0 * r0)) ** (5 / 6))
 
 
+MAX_D_OVER_R0 = 1e6  # a screen width over r0 beyond this has phase differences no grid samples
+
+
 def _check_screen_args(n, dx, r0, L0, l0):
     if not (isinstance(n, (int, np.integer)) and n >= 4):
         raise ValueError("n (screen size in pixels) must be an integer >= 4")
@@ -124,8 +127,11 @@ def _check_screen_args(n, dx, r0, L0, l0):
     r0 = float(as_positive(r0, "r0"))
     if not (np.isinf(L0) or L0 > 0):
         raise ValueError("L0 (outer scale) must be > 0 or inf")
-    if l0 < 0:
-        raise ValueError("l0 (inner scale) must be >= 0")
+    if not (np.isfinite(l0) and l0 >= 0):
+        raise ValueError(f"l0 (inner scale) must be a finite length >= 0, got {l0!r}")
+    if n * dx / r0 > MAX_D_OVER_R0:
+        raise ValueError(f"r0 = {r0:g} m is too small for a screen {n * dx:g} m wide: D/r0 = {n * dx / r0:.3g} "
+                         f"must be <= {MAX_D_OVER_R0:g} (the phase is then not sampled by any grid)")
     return dx, r0
 
 

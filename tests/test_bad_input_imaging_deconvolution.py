@@ -1,0 +1,70 @@
+"""Issue 20's reproducers in imaging and deconvolution: each is a ValueError naming the argument, or a correct
+result; the extremes of the DOLP priors (c2^m up to 1e40, q = 1) stay finite and right."""
+
+import numpy as np
+import pytest
+
+from scatterlab import imaging
+from scatterlab.cli import main
+from scatterlab.deconvolution import (PRIOR_SETS, SuperGaussianPrior, blind_deconvolve, dolp_update,
+                                      dolp_update_companion, map_objective)
+
+A = imaging.ANGLES_0_45_90_135
+GOOD = np.random.default_rng(0).poisson(100, (4, 16, 16)).astype(float)
+
+CASES = [
+    (lambda: imaging.phase_screen(32, 0.01, 0.1, 1, l0=np.nan), "l0"),
+    (lambda: imaging.phase_screen(32, 0.01, 1e-300, 1), "r0"),
+    (lambda: imaging.psf(np.zeros((8, 8))), "pupil"),
+    (lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=10, read_noise=np.nan), "read_noise"),
+    (lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=np.inf), "photons"),
+    (lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=10, scale=-1), "scale"),
+    (lambda: blind_deconvolve(np.zeros((4, 16, 16)), A, iterations=2), "no photons"),
+    (lambda: blind_deconvolve(-GOOD, A, iterations=2), "no photons"),
+    (lambda: blind_deconvolve(GOOD, A, psf0=np.full((32, 32), np.nan), iterations=2), "psf0"),
+    (lambda: blind_deconvolve(GOOD, A, psf0=np.zeros((32, 32)), iterations=2), "psf0"),
+    (lambda: blind_deconvolve(GOOD, A, psf0=-np.ones((32, 32)), iterations=2), "psf0"),
+    (lambda: blind_deconvolve(GOOD, A, psf_radius=0, iterations=2), "psf_radius"),
+    (lambda: blind_deconvolve(GOOD, A, priors=PRIOR_SETS["ch5"], prior_weight=np.nan, iterations=2),
+     "prior_weight"),
+    (lambda: blind_deconvolve(GOOD, np.array([0, 45, 90, 135.0]), iterations=2), "radians"),
+    (lambda: SuperGaussianPrior(1e40, 0.3), "c2"),
+    (lambda: SuperGaussianPrior(3.0, 1.5), "c3"),
+]
+
+
+@pytest.mark.parametrize("case, name", CASES)
+def test_bad_input_is_a_value_error_naming_the_problem(case, name):
+    with pytest.raises(ValueError, match=name):
+        case()
+
+
+def test_negative_seed_is_named(capsys):
+    assert main(["study", "run", "fig4", "--quick", "--seed", "-5"]) == 2
+    assert "--seed" in capsys.readouterr().err
+
+
+def test_dolp_update_at_q_equal_one_takes_the_best_root():
+    """At q = Q/T = 1 the MAP update is the objective's maximum on [0, 1] (brute force on a fine grid), and
+    the companion-matrix reference agrees."""
+    prior = PRIOR_SETS["ch5"][0]
+    P = np.linspace(0, 1, 200001)
+    best = P[np.argmax(map_objective(P, 10.0, 10.0, prior))]
+    assert dolp_update(np.array([10.0]), np.array([10.0]), prior)[0] == pytest.approx(best, abs=1e-5)
+    assert dolp_update_companion(10.0, 10.0, prior) == pytest.approx(best, abs=1e-5)
+
+
+def test_huge_prior_coefficients_stay_finite():
+    """c2^m = 1e40: the log-density is finite (never -inf or NaN) and the MAP update stays in [0, 1] and equals
+    the brute-force maximum of the objective."""
+    prior = SuperGaussianPrior(1e4, 0.3)  # c2^10 = 1e40
+    lp = prior.log_pdf(np.array([0.0, 0.3, 1.0]))
+    assert np.all(np.isfinite(lp)) and lp[1] == 0 and lp[0] < -1e29
+    T = np.array([1e3, 1e6])
+    Q = np.array([500.0, 2e5])
+    P = dolp_update(T, Q, prior)
+    assert np.all((P >= 0) & (P <= 1))
+    grid = np.linspace(0, 1, 400001)
+    for t, q, p in zip(T, Q, P):
+        o = map_objective(grid, t, q, prior)
+        assert map_objective(np.array([p]), t, q, prior)[0] >= o.max() - 1e-6 * abs(o.max())
