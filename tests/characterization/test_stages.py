@@ -57,34 +57,49 @@ def test_known_psf_restoration_removes_the_halo_bias_of_the_paint():
     assert np.all(err_restored < 0.5 * err_raw), (err_raw, err_restored)
 
 
-def test_interrupted_run_resumes_to_the_same_results(tmp_path, monkeypatch):
-    """A run killed after the first plate's figure finishes on a plain rerun (no --force), with the numbers of
-    an uninterrupted run."""
-    from scatterlab.characterization import report
-
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
     cfg = small(image_size=32, iterations=3, plates=[Plate(), Plate("steel", 3.60, 5.88)], estimate=["classes"])
-    whole = characterize(cfg, tmp_path / "whole")
-    calls = {"n": 0}
-    original = report.plate_figure
+    out = tmp_path_factory.mktemp("whole")
+    characterize(cfg, out)
+    return cfg, json.loads((out / "summary.json").read_text())["plates"]
 
-    def dies_on_second(*a, **k):
+
+# (module, function, which call dies): killed inside a deconvolution, while scoring the second plate, between
+# the two plates' figures, and after results.h5 is in place but before summary.json is written
+BOUNDARIES = [("restoration", "_em", 3), ("metrics", "score_plate", 2), ("report", "plate_figure", 2),
+              ("runtime_results", "write_json", 1)]
+
+
+@pytest.mark.parametrize("module, name, call", BOUNDARIES)
+def test_a_run_killed_at_any_stage_finishes_on_a_plain_rerun(tmp_path, monkeypatch, uninterrupted, module,
+                                                             name, call):
+    """A run killed at a stage boundary finishes on a plain rerun (no --force), with the numbers of an
+    uninterrupted run; a finished run is not overwritten silently."""
+    import importlib
+
+    cfg, whole = uninterrupted
+    mod = importlib.import_module({"runtime_results": "scatterlab.runtime.results"}.get(
+        module, f"scatterlab.characterization.{module}"))
+    original = getattr(mod, name)
+    calls = {"n": 0}
+
+    def dies(*a, **k):
         calls["n"] += 1
-        if calls["n"] == 2:
+        if calls["n"] == call:
             raise KeyboardInterrupt("killed")
         return original(*a, **k)
 
-    monkeypatch.setattr(report, "plate_figure", dies_on_second)
+    monkeypatch.setattr(mod, name, dies)
     with pytest.raises(KeyboardInterrupt):
         characterize(cfg, tmp_path / "killed")
-    monkeypatch.setattr(report, "plate_figure", original)
-    assert (tmp_path / "killed" / "checkpoints").is_dir() and not (tmp_path / "killed" / "report.md").exists()
+    monkeypatch.setattr(mod, name, original)
+    assert not (tmp_path / "killed" / "report.md").exists()
     rerun = characterize(cfg, tmp_path / "killed")  # no overwrite needed: the run was not finished
-    a = json.loads((whole.parent / "summary.json").read_text())["plates"]
-    b = json.loads((rerun.parent / "summary.json").read_text())["plates"]
-    assert a == b
+    assert json.loads((rerun.parent / "summary.json").read_text())["plates"] == whole
     assert not (tmp_path / "killed" / "checkpoints").exists()
     with pytest.raises(FileExistsError):
-        characterize(cfg, tmp_path / "killed")  # a finished run is not overwritten silently
+        characterize(cfg, tmp_path / "killed")
 
 
 @pytest.mark.parametrize("text, key", [
