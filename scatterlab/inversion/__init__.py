@@ -9,12 +9,14 @@
 * :func:`scatterlab.inversion.report.posterior_report` -- corner, traces, predictive band, tables.
 """
 
-from scatterlab.inversion.design import crlb, fisher_information
+from scatterlab.inversion.design import crlb, fisher_information, inverse_information
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.inversion.least_squares import (
     DEFAULT_BOUNDS,
     DEFAULT_STARTS,
+    DOLP_MARGIN,
     DolpFit,
+    IdentifiabilityWarning,
     fit_dolp,
     fit_dolp_per_pixel,
     model_dolp,
@@ -22,6 +24,10 @@ from scatterlab.inversion.least_squares import (
 from scatterlab.inversion.posterior import (
     ConvergenceWarning,
     Posterior,
+    PriorOptions,
+    SamplerOptions,
+    effective_sample_size,
+    ensemble_rhat,
     local_minima,
     sample_posterior,
     sample_posteriors,
@@ -30,5 +36,7 @@ from scatterlab.inversion.posterior import (
 from scatterlab.inversion.thilak import ThilakFit, thilak_two_step
 
 __all__ = ["fit_dolp", "fit_dolp_per_pixel", "DolpFit", "model_dolp", "DEFAULT_BOUNDS", "DEFAULT_STARTS",
-           "DolpForward", "sample_posterior", "sample_posteriors", "Posterior", "ConvergenceWarning",
-           "local_minima", "split_rhat", "thilak_two_step", "ThilakFit", "fisher_information", "crlb"]
+           "DOLP_MARGIN", "IdentifiabilityWarning", "DolpForward", "sample_posterior", "sample_posteriors",
+           "Posterior", "PriorOptions", "SamplerOptions", "ConvergenceWarning", "local_minima", "split_rhat",
+           "ensemble_rhat", "effective_sample_size", "thilak_two_step", "ThilakFit", "fisher_information",
+           "crlb", "inverse_information"]

@@ -18,19 +18,29 @@ Default bounds follow the reference (n in [0, 5], kappa in [0, 25]); sigma in [0
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import optimize
 
 from scatterlab._checks import as_angle
+from scatterlab.inversion.design import inverse_information
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.pbrdf import Model
 
-__all__ = ["fit_dolp", "fit_dolp_per_pixel", "DolpFit", "model_dolp", "DEFAULT_BOUNDS", "DEFAULT_STARTS"]
+__all__ = ["fit_dolp", "fit_dolp_per_pixel", "DolpFit", "model_dolp", "DEFAULT_BOUNDS", "DEFAULT_STARTS",
+           "DOLP_MARGIN", "IdentifiabilityWarning", "prepare_data", "parameter_bounds", "check_starts",
+           "check_noise"]
 
+PARAMETER_NAMES = ("n", "kappa", "sigma")
 DEFAULT_BOUNDS = {"n": (0.0, 5.0), "kappa": (0.0, 25.0), "sigma": (0.01, 1.5)}
 DEFAULT_STARTS = ((1.5, 0.05), (1.3, 3.0), (3.0, 4.0), (1.0, 10.0), (1.5, 18.0))
+DOLP_MARGIN = 0.05  # how far outside [0, 1] a measured DOLP may fall (noise) before it is refused
+
+
+class IdentifiabilityWarning(UserWarning):
+    """The data do not determine some parameter (singular Fisher information at the solution)."""
 
 
 def model_dolp(n, kappa, sigma, theta_i, theta_r, phi=np.pi, **model_kw) -> np.ndarray:
@@ -53,6 +63,9 @@ class DolpFit:
     converged : ndarray of bool
     valid : ndarray of bool -- enough finite measurements to fit.
     iterations : int
+    identifiable : ndarray of bool (..., P) or None
+        Whether the data determine each parameter at the solution; an unidentifiable parameter has an
+        infinite variance in ``covariance`` (NaN covariances), never a silently finite one.
     """
 
     n: np.ndarray
@@ -63,6 +76,7 @@ class DolpFit:
     converged: np.ndarray
     valid: np.ndarray
     iterations: int
+    identifiable: np.ndarray | None = None
 
     @property
     def eta(self) -> np.ndarray:
@@ -74,28 +88,88 @@ class DolpFit:
         return np.sqrt(np.clip(np.diagonal(self.covariance, axis1=-2, axis2=-1), 0, None))
 
 
-def _prepare(dolp, theta_i, theta_r, phi):
-    y = np.asarray(dolp, float)
+def prepare_data(dolp, theta_i, theta_r, phi=np.pi, *, margin: float = DOLP_MARGIN):
+    """Validate DOLP data and geometries; returns ``(dolp (..., M), theta_i (M,), theta_r (M,), phi (M,))``.
+
+    NaN entries of ``dolp`` are kept (they mark missing measurements). Infinite entries, and finite ones
+    outside ``[-margin, 1 + margin]`` (a DOLP is in [0, 1]; ``margin`` allows for noise), raise a ValueError
+    naming ``dolp``. Shared by the least-squares fit, the posterior sampler and the design functions.
+    """
+    try:
+        y = np.asarray(dolp, float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"dolp must be numeric, got {dolp!r}") from exc
     ti = as_angle(theta_i, "theta_i").ravel()
     tr = as_angle(theta_r, "theta_r").ravel()
-    ph = np.broadcast_to(np.asarray(phi, float), ti.shape)
+    try:
+        ph = np.broadcast_to(np.asarray(phi, float), ti.shape)
+    except ValueError as exc:
+        raise ValueError(f"phi must be a float or one value per geometry ({ti.size})") from exc
     if ti.shape != tr.shape:
         raise ValueError("theta_i and theta_r must have one entry per measured geometry")
+    if not np.all(np.isfinite(ph)):
+        raise ValueError("phi must be finite [rad]")
     if y.shape[-1:] != ti.shape:
         raise ValueError(f"dolp must have shape (..., {ti.size}) (one value per geometry), got {y.shape}")
+    if np.any(np.isinf(y)):
+        raise ValueError("dolp must be finite or NaN (NaN marks a missing measurement); got an infinite value")
+    if not (np.isfinite(margin) and margin >= 0):
+        raise ValueError(f"margin must be a non-negative float, got {margin!r}")
+    bad = np.isfinite(y) & ((y < -margin) | (y > 1 + margin))
+    if np.any(bad):
+        raise ValueError(f"dolp must be in [0, 1] (within the noise margin {margin:g}); got "
+                         f"{int(bad.sum())} value(s) outside, e.g. {y[bad].ravel()[0]:.4g}. Set them to NaN to "
+                         "leave them out")
     return y, ti, tr, ph
 
 
-def _bounds(bounds, P):
-    b = dict(DEFAULT_BOUNDS, **(bounds or {}))
-    for name, (lo, hi) in b.items():
-        if not lo < hi:
+def parameter_bounds(bounds, P: int):
+    """Validated lower and upper bounds ``(lo (P,), hi (P,))`` of (n, kappa[, sigma]).
+
+    ``bounds`` maps any of ``"n"``, ``"kappa"``, ``"sigma"`` to ``(low, high)``; missing names take
+    :data:`DEFAULT_BOUNDS`. An unknown name raises a ValueError naming it and the allowed ones.
+    """
+    bounds = dict(bounds or {})
+    unknown = sorted(set(bounds) - set(DEFAULT_BOUNDS))
+    if unknown:
+        raise ValueError(f"bounds has unknown key(s) {unknown}; allowed keys are {sorted(DEFAULT_BOUNDS)}")
+    b = dict(DEFAULT_BOUNDS, **bounds)
+    for name, pair in b.items():
+        try:
+            lo, hi = (float(v) for v in pair)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"bounds[{name!r}] must be (low, high), got {pair!r}") from exc
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
             raise ValueError(f"bounds[{name!r}] must be (low, high) with low < high, got {(lo, hi)}")
     if b["n"][0] < 0 or b["kappa"][0] < 0 or b["sigma"][0] < 1e-3 or b["sigma"][1] > 2.5:
         raise ValueError("bounds must keep n >= 0, kappa >= 0 and sigma within [1e-3, 2.5]")
-    lo = np.array([b["n"][0], b["kappa"][0], b["sigma"][0]][:P])
-    hi = np.array([b["n"][1], b["kappa"][1], b["sigma"][1]][:P])
+    lo = np.array([b["n"][0], b["kappa"][0], b["sigma"][0]][:P], float)
+    hi = np.array([b["n"][1], b["kappa"][1], b["sigma"][1]][:P], float)
     return lo, hi
+
+
+def check_starts(starts):
+    """``starts`` as an array (S, 2) of (n, kappa) starting points; empty or malformed is a ValueError."""
+    try:
+        arr = np.asarray(starts, float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"starts must be a sequence of (n, kappa) pairs, got {starts!r}") from exc
+    if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] != 2 or not np.all(np.isfinite(arr)):
+        raise ValueError(f"starts must be a non-empty sequence of finite (n, kappa) pairs, got {starts!r}")
+    return arr
+
+
+def check_noise(noise, name: str = "noise"):
+    """A DOLP noise standard deviation: positive and finite (scalar or array), or None."""
+    if noise is None:
+        return None
+    try:
+        arr = np.asarray(noise, float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a positive DOLP standard deviation, got {noise!r}") from exc
+    if not np.all(np.isfinite(arr) & (arr > 0)):
+        raise ValueError(f"{name} must be a positive, finite DOLP standard deviation (or None), got {noise!r}")
+    return arr
 
 
 def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
@@ -170,45 +244,81 @@ def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bound
     Parameters
     ----------
     dolp : array (..., M)
-        Measured DOLP; NaN entries are masked.
+        Measured DOLP in [0, 1]; NaN entries are masked. Infinite values, and values outside [0, 1] by more
+        than ``max(DOLP_MARGIN, 5 * noise)`` (0.05 without ``noise``), raise a ValueError: set them to NaN to
+        leave them out.
     theta_i, theta_r : array (M,) [rad]
+        M >= P, the number of fitted parameters.
     phi : float or array (M,) [rad], default pi (specular plane)
     sigma : float or array (...), optional
         Known roughness; when given only (n, kappa) are fitted.
     noise : float or array (...), optional
-        DOLP noise standard deviation for the covariance (default: estimated from the residuals).
+        DOLP noise standard deviation (> 0) for the covariance (default: estimated from the residuals).
     bounds : dict, optional
-        ``{"n": (lo, hi), "kappa": (lo, hi), "sigma": (lo, hi)}``; defaults in ``DEFAULT_BOUNDS``.
-    starts : sequence of (n, kappa)
+        ``{"n": (lo, hi), "kappa": (lo, hi), "sigma": (lo, hi)}``; defaults in ``DEFAULT_BOUNDS``; another key
+        is a ValueError.
+    starts : non-empty sequence of (n, kappa)
     sigma0 : float -- starting roughness.
     max_iter, tol : Levenberg-Marquardt limits (iterations per start; relative cost decrease).
 
     Returns
     -------
     DolpFit
+        ``converged`` says the iteration stopped on its criteria; ``identifiable`` (..., P) says whether the
+        data determine each parameter at the solution (non-singular Fisher information, see
+        :func:`~scatterlab.inversion.design.inverse_information`). An undetermined parameter has an
+        infinite variance (NaN covariances), and an :class:`IdentifiabilityWarning` says how many pixels are
+        affected.
     """
-    y, ti, tr, ph = _prepare(dolp, theta_i, theta_r, phi)
+    noise = check_noise(noise)
+    margin = DOLP_MARGIN if noise is None else max(DOLP_MARGIN, 5 * float(np.max(noise)))
+    y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi, margin=margin)
+    starts = check_starts(starts)
+    if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1 and tol > 0):
+        raise ValueError(f"max_iter must be a positive integer and tol > 0, got {max_iter!r}, {tol!r}")
     fit_sigma = sigma is None
     P = 3 if fit_sigma else 2
-    lo, hi = _bounds(bounds, P)
+    if ti.size < P:
+        raise ValueError(f"dolp has {ti.size} geometries; at least {P} are needed to fit {P} parameters")
+    lo, hi = parameter_bounds(bounds, P)
     batch = y.shape[:-1]
     mask = np.isfinite(y)
     valid = mask.sum(-1) >= P
-    y0 = np.where(mask, y, 0.0)
     sig_known = None if fit_sigma else np.broadcast_to(np.asarray(sigma, float), batch)
     forward = DolpForward(ti, tr, ph, sigma=None if fit_sigma else sig_known.ravel(), **model_kw)
+    M = y.shape[-1]
+    p, cost, done, iterations = _best_of_starts(
+        forward, np.where(mask, y, 0.0).reshape(-1, M), mask.reshape(-1, M), valid.ravel(), starts,
+        sigma0 if fit_sigma else None, lo, hi, max_iter, tol)
+    p, cost, done = p.reshape(batch + (P,)), cost.reshape(batch), done.reshape(batch)
+    cov, identifiable = _laplace_covariance(forward, p, mask, cost, noise)
+    nan = np.where(valid, 1.0, np.nan)
+    identifiable = identifiable & valid[..., None]
+    undetermined = valid & ~np.all(identifiable, -1)
+    if np.any(undetermined):
+        names = [nm for k, nm in enumerate(PARAMETER_NAMES[:P]) if np.any(valid & ~identifiable[..., k])]
+        warnings.warn(f"the data do not determine {', '.join(names)} at {int(undetermined.sum())} of "
+                      f"{int(valid.sum())} fitted pixel(s) (singular Fisher information at the solution): their "
+                      "variance is reported as inf; see DolpFit.identifiable", IdentifiabilityWarning,
+                      stacklevel=2)
+    sig_out = p[..., 2] if fit_sigma else sig_known
+    return DolpFit(n=p[..., 0] * nan, kappa=p[..., 1] * nan, sigma=np.asarray(sig_out) * nan,
+                   covariance=cov * nan[..., None, None], cost=cost * nan, converged=done & valid,
+                   valid=valid, iterations=iterations, identifiable=identifiable)
 
-    y0f, maskf, validf = y0.reshape(-1, y.shape[-1]), mask.reshape(-1, y.shape[-1]), valid.ravel()
+
+def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, max_iter, tol):
+    """Run LM from every start for the N flattened pixels; keep the lowest cost per pixel."""
+    P = lo.size
     best_p = best_cost = best_done = None
     total_iter = 0
     for n0, k0 in starts:
-        p = np.empty((validf.size, P))
+        p = np.empty((valid.size, P))
         p[:, 0], p[:, 1] = n0, k0
-        if fit_sigma:
+        if sigma0 is not None:
             p[:, 2] = sigma0
         p = np.clip(p, lo, hi)
-        p, cost, done, it = _levenberg_marquardt(forward, y0f, maskf, p, lo, hi, validf, max_iter, tol)
-        p, cost, done = p.reshape(batch + (P,)), cost.reshape(batch), done.reshape(batch)
+        p, cost, done, it = _levenberg_marquardt(forward, y0, mask, p, lo, hi, valid, max_iter, tol)
         total_iter += it
         if best_p is None:
             best_p, best_cost, best_done = p, cost, done
@@ -217,20 +327,21 @@ def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bound
             best_p = np.where(take[..., None], p, best_p)
             best_done = np.where(take, done, best_done)
             best_cost = np.where(take, cost, best_cost)
-    _, J = forward.value_and_jacobian(best_p.reshape(-1, P))
+    return best_p, best_cost, best_done, total_iter
+
+
+def _laplace_covariance(forward, p, mask, cost, noise):
+    """Laplace covariance s^2 (J^T J)^+ at the solutions ``p`` (..., P) and the identifiable parameters."""
+    batch, P = p.shape[:-1], p.shape[-1]
+    _, J = forward.value_and_jacobian(p.reshape(-1, P))
     J = J.reshape(batch + J.shape[-2:])
     J = np.where(mask[..., None], J, 0.0)
     m = mask.sum(-1)
-    s2 = (np.asarray(noise, float) ** 2 if noise is not None
-          else np.where(m > P, 2 * best_cost / np.maximum(m - P, 1), np.nan))
+    s2 = (noise ** 2 if noise is not None
+          else np.where(m > P, 2 * cost / np.maximum(m - P, 1), np.nan))
     A = np.einsum("...mi,...mj->...ij", J, J)
-    with np.errstate(all="ignore"):
-        cov = np.linalg.pinv(A) * np.asarray(s2)[..., None, None]
-    nan = np.where(valid, 1.0, np.nan)
-    sig_out = best_p[..., 2] if fit_sigma else sig_known
-    return DolpFit(n=best_p[..., 0] * nan, kappa=best_p[..., 1] * nan, sigma=np.asarray(sig_out) * nan,
-                   covariance=cov * nan[..., None, None], cost=best_cost * nan, converged=best_done & valid,
-                   valid=valid, iterations=total_iter)
+    cov, identifiable = inverse_information(A)
+    return cov * np.asarray(s2)[..., None, None], identifiable
 
 
 def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=None,
@@ -240,10 +351,11 @@ def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=
     Same forward model, analytic Jacobian, starts and bounds as :func:`fit_dolp`, so that comparing the two
     measures batching alone. No covariance (NaN).
     """
-    y, ti, tr, ph = _prepare(dolp, theta_i, theta_r, phi)
+    y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi)
+    starts = check_starts(starts)
     fit_sigma = sigma is None
     P = 3 if fit_sigma else 2
-    lo, hi = _bounds(bounds, P)
+    lo, hi = parameter_bounds(bounds, P)
     batch = y.shape[:-1]
     flat = y.reshape(-1, y.shape[-1])
     sig_flat = None if fit_sigma else np.broadcast_to(np.asarray(sigma, float), batch).ravel()

@@ -57,7 +57,19 @@ def summary_table(post: Posterior, truth=None) -> str:
 
 def posterior_report(post: Posterior, out, name: str = "posterior", *, rng=None, truth=None,
                      overwrite: bool = False) -> Path:
-    """Write the figures and the Markdown report of one posterior; returns the Markdown path."""
+    """Write the figures and the Markdown report of one posterior; returns the Markdown path.
+
+    Parameters
+    ----------
+    post : Posterior
+    out : path -- directory for ``<name>.md`` and the PNG figures.
+    name : str
+    rng : anything :func:`numpy.random.default_rng` accepts
+        Draws the posterior-predictive band; ``None`` takes fresh entropy, so give a seed for a
+        reproducible figure.
+    truth : (n, kappa, sigma), optional -- shown beside the estimates (simulations).
+    overwrite : bool -- replace existing files (otherwise FileExistsError).
+    """
     import corner
     import matplotlib
 
@@ -66,7 +78,7 @@ def posterior_report(post: Posterior, out, name: str = "posterior", *, rng=None,
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    rng = rng if rng is not None else np.random.default_rng(0)
+    rng = np.random.default_rng(rng)
     P = 2 if post.sigma_known is not None else 3
     samples = post.samples[:, :P]
     labels = [LABELS[p] for p in PARAMETERS[:P]]
@@ -91,8 +103,7 @@ def posterior_report(post: Posterior, out, name: str = "posterior", *, rng=None,
     fig, ax = plt.subplots(figsize=(7, 3.5))
     ax.fill_between(x, lo, hi, color="C0", alpha=0.3, label="95 % posterior predictive (model)")
     ax.plot(x, mid, color="C0", label="posterior median model")
-    err = post.noise if post.noise is not None else float(np.median(post.noise_chain))
-    ax.errorbar(x, post.dolp[order], yerr=err, fmt="o", color="k", ms=3, label="data +/- noise")
+    ax.errorbar(x, post.dolp[order], yerr=post.data_error()[order], fmt="o", color="k", ms=3, label="data +/- noise")
     ax.set_xticks(x, [f"{np.degrees(a):.0f}/{np.degrees(b):.0f}" for a, b in
                       zip(post.theta_i[order], post.theta_r[order])], rotation=60, fontsize=7)
     ax.set_xlabel(r"$\theta_i / \theta_r$ [deg]")
@@ -104,8 +115,10 @@ def posterior_report(post: Posterior, out, name: str = "posterior", *, rng=None,
     lines = [f"# Posterior: {name}", "", summary_table(post, truth), "",
              f"Diagnostics: {d['n_steps']} steps x {d['walkers']} walkers, burn-in {d['burn']}, thin {d['thin']}; "
              f"tau = {np.round(d['tau'], 1).tolist()} (run = {d['steps_over_tau']:.0f} tau); acceptance "
-             f"{d['acceptance']:.2f}; split R-hat {np.round(d['rhat'], 3).tolist()}; effective samples "
-             f"{d['n_effective']:.0f}; {'converged' if d['converged'] else '**not converged**'}; "
+             f"{d['acceptance']:.2f}; R-hat between {d['n_ensembles']} ensembles "
+             f"{np.round(d['rhat'], 3).tolist()}; effective samples "
+             f"{ {k: round(v) if np.isfinite(v) else v for k, v in d['ess'].items()} }; "
+             f"{'converged' if d['converged'] else '**not converged**: ' + d['convergence_reason']}; "
              f"{'**multimodal**' if d['multimodal'] else 'one mode'}; {d['seconds']:.1f} s.", ""]
     if post.messages:
         lines += ["Warnings:", ""] + [f"- {m}" for m in post.messages] + [""]

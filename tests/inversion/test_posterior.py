@@ -3,6 +3,8 @@ noise as a parameter, multimodality detection, degenerate data, bad input, and c
 
 import warnings
 
+import emcee
+import h5py
 import numpy as np
 import pytest
 
@@ -60,17 +62,36 @@ def test_noise_level_as_a_parameter_is_recovered():
 def test_checkpoint_and_resume_continue_the_same_chain(tmp_path):
     y = model_dolp(1.39, 0.34, 0.3, TI, TR) + 2e-3 * np.random.default_rng(0).standard_normal(TI.size)
     path = tmp_path / "chain.h5"
-    first = quiet_sample(y, TI, TR, 2e-3, np.random.default_rng(1), n_steps=400, backend=path)
-    resumed = quiet_sample(y, TI, TR, 2e-3, np.random.default_rng(9), n_steps=900, backend=path)
-    assert first.n_steps == 400 and resumed.n_steps == 900
-    import emcee
+    first = quiet_sample(y, TI, TR, 2e-3, np.random.default_rng(1), n_steps=200, backend=path)
+    stored = [emcee.backends.HDFBackend(str(path), name=f"posterior/ensemble_{k}", read_only=True).get_chain()
+              for k in range(first.n_ensembles)]
+    resumed = quiet_sample(y, TI, TR, 2e-3, np.random.default_rng(9), n_steps=450, backend=path)
+    assert first.n_steps == 200 and resumed.n_steps == 450
+    for k, before in enumerate(stored):
+        full = emcee.backends.HDFBackend(str(path), name=f"posterior/ensemble_{k}", read_only=True).get_chain()
+        assert full.shape[0] == 450
+        np.testing.assert_array_equal(full[:200], before)  # the interrupted run's steps, untouched
+    np.testing.assert_allclose(first.chain[-1, :, 0].mean(), resumed.chain[0, :, 0].mean(), rtol=0.2)
 
-    full = emcee.backends.HDFBackend(str(path), name="posterior", read_only=True).get_chain()
-    assert full.shape[0] == 900
-    # the first 400 stored steps are the interrupted run's, untouched
-    np.testing.assert_array_equal(full[:400, :, 0], emcee.backends.HDFBackend(
-        str(path), name="posterior", read_only=True).get_chain()[:400, :, 0])
-    np.testing.assert_allclose(first.chain[-1, :, 0].mean(), full[399, :, 0].mean(), rtol=0.2)
+
+def test_resuming_with_other_data_or_settings_is_refused(tmp_path):
+    """Issue 20: a checkpoint written for other data silently mixed two posteriors; now the digest of data,
+    geometries, error model, priors and sampler settings stored in the group must match."""
+    y = model_dolp(1.39, 0.34, 0.3, TI, TR) + 2e-3 * np.random.default_rng(0).standard_normal(TI.size)
+    path = tmp_path / "chain.h5"
+    quiet_sample(y, TI, TR, 2e-3, 1, n_steps=40, n_ensembles=1, backend=path)
+    changed = [dict(dolp=y + 1e-3), dict(noise=3e-3), dict(sigma=0.3), dict(kappa_prior="log-uniform"),
+               dict(systematic=1e-3), dict(bounds={"n": (0.5, 4.0)}), dict(moves="stretch")]
+    for change in changed:
+        kw = dict(dolp=y, noise=2e-3, n_steps=80, n_ensembles=1, backend=path) | change
+        with pytest.raises(ValueError, match="other data or settings"):
+            quiet_sample(kw.pop("dolp"), TI, TR, kw.pop("noise"), 2, **kw)
+    with pytest.raises(ValueError, match="shape"):
+        quiet_sample(y, TI, TR, 2e-3, 2, n_steps=80, n_ensembles=1, n_walkers=16, backend=path)
+    # the same problem resumes; the group records its digest
+    assert quiet_sample(y, TI, TR, 2e-3, 2, n_steps=80, n_ensembles=1, backend=path).n_steps == 80
+    with h5py.File(path, "r") as f:
+        assert len(f["posterior/ensemble_0"].attrs["scatterlab_digest"]) == 64
 
 
 def test_many_problems_through_an_executor_are_reproducible(tmp_path):
@@ -126,8 +147,6 @@ def test_degenerate_data_give_finite_reports(case):
 def test_bad_input():
     y = model_dolp(1.5, 0.0, 0.3, TI, TR)
     rng = np.random.default_rng(0)
-    with pytest.raises(ValueError, match="rng"):
-        sample_posterior(y, TI, TR, 0.01, None)
     with pytest.raises(ValueError, match="noise"):
         sample_posterior(y, TI, TR, -1.0, rng)
     with pytest.raises(ValueError, match="kappa_prior"):
