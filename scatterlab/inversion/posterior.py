@@ -899,7 +899,10 @@ class Posterior:
             post["noise"] = self.noise_chain.T
         attrs = {"n_ensembles": self.n_ensembles, "walkers_per_ensemble": self.chain.shape[1] // self.n_ensembles,
                  "burn": self.burn, "thin": self.thin, "converged": int(self.converged)}
-        return az.from_dict(posterior=post, sample_stats={"lp": self.log_prob.T}, attrs=attrs)
+        idata = az.from_dict(posterior=post, sample_stats={"lp": self.log_prob.T},
+                             observed_data={"dolp": self.dolp}, dims={"dolp": ["geometry"]}, attrs=attrs)
+        idata.posterior.attrs.update(attrs)
+        return idata
 
     def predictive(self, rng=None, n_draws: int = 200, *, theta_i=None, theta_r=None, phi=None,
                    with_noise: bool = False) -> np.ndarray:
