@@ -1,8 +1,10 @@
-"""Inversion of (n, kappa, sigma) from multi-geometry DOLP (Sec. 3.1.2.3, Eqs. 115-117; Sec. 7.2, Eqs. 199-204).
+"""Inversion of (n, kappa, sigma) from multi-geometry DOLP (Sec. 3.1.2.3, Eqs. 115-117; Sec. 7.2,
+Eqs. 199-204).
 
 * :func:`fit_dolp` -- batched bounded least squares over leading axes (whole images at once);
   :func:`fit_dolp_per_pixel` is the per-pixel scipy baseline;
-* :func:`thilak_two_step` -- Thilak et al.'s two-step method (Eqs. 116-117), the comparison baseline;
+* :func:`thilak_two_step` -- Thilak et al.'s two-step method (Eqs. 116-117), the comparison
+baseline;
 * :func:`sample_posterior` / :func:`sample_posteriors` -- emcee posterior sampling with diagnostics,
   multimodality detection and HDF5 checkpoints;
 * :func:`fisher_information`, :func:`crlb` -- experiment design;
@@ -35,8 +37,29 @@ from scatterlab.inversion.posterior import (
 )
 from scatterlab.inversion.thilak import ThilakFit, thilak_two_step
 
-__all__ = ["fit_dolp", "fit_dolp_per_pixel", "DolpFit", "model_dolp", "DEFAULT_BOUNDS", "DEFAULT_STARTS",
-           "DOLP_MARGIN", "IdentifiabilityWarning", "DolpForward", "sample_posterior", "sample_posteriors",
-           "Posterior", "PriorOptions", "SamplerOptions", "ConvergenceWarning", "local_minima", "split_rhat",
-           "ensemble_rhat", "effective_sample_size", "thilak_two_step", "ThilakFit", "fisher_information",
-           "crlb", "inverse_information"]
+__all__ = [
+    "fit_dolp",
+    "fit_dolp_per_pixel",
+    "DolpFit",
+    "model_dolp",
+    "DEFAULT_BOUNDS",
+    "DEFAULT_STARTS",
+    "DOLP_MARGIN",
+    "IdentifiabilityWarning",
+    "DolpForward",
+    "sample_posterior",
+    "sample_posteriors",
+    "Posterior",
+    "PriorOptions",
+    "SamplerOptions",
+    "ConvergenceWarning",
+    "local_minima",
+    "split_rhat",
+    "ensemble_rhat",
+    "effective_sample_size",
+    "thilak_two_step",
+    "ThilakFit",
+    "fisher_information",
+    "crlb",
+    "inverse_information",
+]

@@ -1,15 +1,22 @@
-r"""Least-squares inversion of (n, kappa, sigma) from multi-geometry DOLP (Sec. 7.2.2, Eqs. 199-204).
+r"""Least-squares inversion of (n, kappa, sigma) from multi-geometry DOLP (Sec. 7.2.2, Eqs.
+199-204).
 
-The forward model is the pBRDF DOLP of :class:`scatterlab.pbrdf.Model` (Eq. 203 in the specular plane).
+The forward model is the pBRDF DOLP of :class:`scatterlab.pbrdf.Model` (Eq. 203 in the specular
+plane).
 :func:`fit_dolp` solves, for every pixel of a batch at once,
 
-.. math:: \min_{n,\kappa,\sigma} \sum_j [\mathcal P^{thy}(n - j\kappa, \sigma; \theta_{i,j}, \theta_{r,j}, \phi_j) - \mathcal P_j]^2
+.. math:: \min_{n,\kappa,\sigma} \sum_j [\mathcal P^{thy}(n - j\kappa, \sigma; \theta_{i,j},
+\theta_{r,j}, \phi_j) - \mathcal P_j]^2
 
 with a vectorised Levenberg-Marquardt iteration in numpy (analytic Jacobian, per-pixel damping,
-bounds by projection), from several starting points so that the metal/dielectric ambiguity does not trap a
-pixel in a local minimum; the best start wins per pixel. NaN measurements are masked (left out of the
-residuals); a pixel with fewer valid measurements than unknowns is reported, not fitted. The parameter
-covariance is the Laplace approximation :math:`s^2 (J^TJ)^{-1}` at the solution (``noise`` given: its
+bounds by projection), from several starting points so that the metal/dielectric ambiguity does not
+trap a
+pixel in a local minimum; the best start wins per pixel. NaN measurements are masked (left out of
+the
+residuals); a pixel with fewer valid measurements than unknowns is reported, not fitted. The
+parameter
+covariance is the Laplace approximation :math:`s^2 (J^TJ)^{-1}` at the solution (``noise`` given:
+its
 variance instead of the residual variance). :func:`fit_dolp_per_pixel` is the per-pixel
 ``scipy.optimize.least_squares`` baseline.
 
@@ -29,9 +36,20 @@ from scatterlab.inversion.design import inverse_information
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.pbrdf import Model
 
-__all__ = ["fit_dolp", "fit_dolp_per_pixel", "DolpFit", "model_dolp", "DEFAULT_BOUNDS", "DEFAULT_STARTS",
-           "DOLP_MARGIN", "IdentifiabilityWarning", "prepare_data", "parameter_bounds", "check_starts",
-           "check_noise"]
+__all__ = [
+    "fit_dolp",
+    "fit_dolp_per_pixel",
+    "DolpFit",
+    "model_dolp",
+    "DEFAULT_BOUNDS",
+    "DEFAULT_STARTS",
+    "DOLP_MARGIN",
+    "IdentifiabilityWarning",
+    "prepare_data",
+    "parameter_bounds",
+    "check_starts",
+    "check_noise",
+]
 
 PARAMETER_NAMES = ("n", "kappa", "sigma")
 DEFAULT_BOUNDS = {"n": (0.0, 5.0), "kappa": (0.0, 25.0), "sigma": (0.01, 1.5)}
@@ -64,7 +82,8 @@ class DolpFit:
     valid : ndarray of bool -- enough finite measurements to fit.
     iterations : int
     identifiable : ndarray of bool (..., P) or None
-        Whether the data determine each parameter at the solution; an unidentifiable parameter has an
+        Whether the data determine each parameter at the solution; an unidentifiable parameter has
+        an
         infinite variance in ``covariance`` (NaN covariances), never a silently finite one.
     """
 
@@ -89,11 +108,15 @@ class DolpFit:
 
 
 def prepare_data(dolp, theta_i, theta_r, phi=np.pi, *, margin: float = DOLP_MARGIN):
-    """Validate DOLP data and geometries; returns ``(dolp (..., M), theta_i (M,), theta_r (M,), phi (M,))``.
+    """Validate DOLP data and geometries; returns ``(dolp (..., M), theta_i (M,), theta_r (M,), phi
+    (M,))``.
 
-    NaN entries of ``dolp`` are kept (they mark missing measurements). Infinite entries, and finite ones
-    outside ``[-margin, 1 + margin]`` (a DOLP is in [0, 1]; ``margin`` allows for noise), raise a ValueError
-    naming ``dolp``. Shared by the least-squares fit, the posterior sampler and the design functions.
+    NaN entries of ``dolp`` are kept (they mark missing measurements). Infinite entries, and finite
+    ones
+    outside ``[-margin, 1 + margin]`` (a DOLP is in [0, 1]; ``margin`` allows for noise), raise a
+    ValueError
+    naming ``dolp``. Shared by the least-squares fit, the posterior sampler and the design
+    functions.
     """
     try:
         y = np.asarray(dolp, float)
@@ -110,16 +133,22 @@ def prepare_data(dolp, theta_i, theta_r, phi=np.pi, *, margin: float = DOLP_MARG
     if not np.all(np.isfinite(ph)):
         raise ValueError("phi must be finite [rad]")
     if y.shape[-1:] != ti.shape:
-        raise ValueError(f"dolp must have shape (..., {ti.size}) (one value per geometry), got {y.shape}")
+        raise ValueError(
+            f"dolp must have shape (..., {ti.size}) (one value per geometry), got {y.shape}"
+        )
     if np.any(np.isinf(y)):
-        raise ValueError("dolp must be finite or NaN (NaN marks a missing measurement); got an infinite value")
+        raise ValueError(
+            "dolp must be finite or NaN (NaN marks a missing measurement); got an infinite value"
+        )
     if not (np.isfinite(margin) and margin >= 0):
         raise ValueError(f"margin must be a non-negative float, got {margin!r}")
     bad = np.isfinite(y) & ((y < -margin) | (y > 1 + margin))
     if np.any(bad):
-        raise ValueError(f"dolp must be in [0, 1] (within the noise margin {margin:g}); got "
-                         f"{int(bad.sum())} value(s) outside, e.g. {y[bad].ravel()[0]:.4g}. Set them to NaN to "
-                         "leave them out")
+        raise ValueError(
+            f"dolp must be in [0, 1] (within the noise margin {margin:g}); got "
+            f"{int(bad.sum())} value(s) outside, e.g. {y[bad].ravel()[0]:.4g}. Set them to NaN to "
+            "leave them out"
+        )
     return y, ti, tr, ph
 
 
@@ -132,7 +161,9 @@ def parameter_bounds(bounds, P: int):
     bounds = dict(bounds or {})
     unknown = sorted(set(bounds) - set(DEFAULT_BOUNDS))
     if unknown:
-        raise ValueError(f"bounds has unknown key(s) {unknown}; allowed keys are {sorted(DEFAULT_BOUNDS)}")
+        raise ValueError(
+            f"bounds has unknown key(s) {unknown}; allowed keys are {sorted(DEFAULT_BOUNDS)}"
+        )
     b = dict(DEFAULT_BOUNDS, **bounds)
     for name, pair in b.items():
         try:
@@ -140,7 +171,9 @@ def parameter_bounds(bounds, P: int):
         except (TypeError, ValueError) as exc:
             raise ValueError(f"bounds[{name!r}] must be (low, high), got {pair!r}") from exc
         if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-            raise ValueError(f"bounds[{name!r}] must be (low, high) with low < high, got {(lo, hi)}")
+            raise ValueError(
+                f"bounds[{name!r}] must be (low, high) with low < high, got {(lo, hi)}"
+            )
     if b["n"][0] < 0 or b["kappa"][0] < 0 or b["sigma"][0] < 1e-3 or b["sigma"][1] > 2.5:
         raise ValueError("bounds must keep n >= 0, kappa >= 0 and sigma within [1e-3, 2.5]")
     lo = np.array([b["n"][0], b["kappa"][0], b["sigma"][0]][:P], float)
@@ -149,13 +182,16 @@ def parameter_bounds(bounds, P: int):
 
 
 def check_starts(starts):
-    """``starts`` as an array (S, 2) of (n, kappa) starting points; empty or malformed is a ValueError."""
+    """``starts`` as an array (S, 2) of (n, kappa) starting points; empty or malformed is a
+    ValueError."""
     try:
         arr = np.asarray(starts, float)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"starts must be a sequence of (n, kappa) pairs, got {starts!r}") from exc
     if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] != 2 or not np.all(np.isfinite(arr)):
-        raise ValueError(f"starts must be a non-empty sequence of finite (n, kappa) pairs, got {starts!r}")
+        raise ValueError(
+            f"starts must be a non-empty sequence of finite (n, kappa) pairs, got {starts!r}"
+        )
     return arr
 
 
@@ -166,18 +202,26 @@ def check_noise(noise, name: str = "noise"):
     try:
         arr = np.asarray(noise, float)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a positive DOLP standard deviation, got {noise!r}") from exc
+        raise ValueError(
+            f"{name} must be a positive DOLP standard deviation, got {noise!r}"
+        ) from exc
     if not np.all(np.isfinite(arr) & (arr > 0)):
-        raise ValueError(f"{name} must be a positive, finite DOLP standard deviation (or None), got {noise!r}")
+        raise ValueError(
+            f"{name} must be a positive, finite DOLP standard deviation (or None), got {noise!r}"
+        )
     return arr
 
 
 def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
-    """Bounded LM from starts ``p`` (N, P) for N pixels at once; returns (p, cost, converged, iterations).
+    """Bounded LM from starts ``p`` (N, P) for N pixels at once; returns (p, cost, converged,
+    iterations).
 
-    Converged pixels leave the working set, so an iteration costs in proportion to the pixels still moving.
-    A pixel converges when a successful step changes the cost by less than ``tol`` (relative) or moves every
-    parameter by less than ``1e-10`` of its bound range, or when the damping grows past 1e10 without success.
+    Converged pixels leave the working set, so an iteration costs in proportion to the pixels still
+    moving.
+    A pixel converges when a successful step changes the cost by less than ``tol`` (relative) or
+    moves every
+    parameter by less than ``1e-10`` of its bound range, or when the damping grows past 1e10 without
+    success.
     """
     N, P = p.shape
     p = p.copy()
@@ -198,7 +242,8 @@ def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
         A = np.einsum("nmi,nmj->nij", J, J)
         g = np.einsum("nmi,nm->ni", J, r)
         pi = p[idx]
-        # active bounds: a parameter on its bound whose descent direction leaves the box is held there,
+        # active bounds: a parameter on its bound whose descent direction leaves the box is held
+        # there,
         # and the step is solved in the free subspace (projection alone stalls along the bound)
         held = ((pi <= lo) & (g > 0)) | ((pi >= hi) & (g < 0))
         free = ~held
@@ -216,7 +261,11 @@ def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
         better = c_new < c
         rel = np.where(better, (c - c_new) / np.maximum(c, 1e-300), 0.0)
         small_step = np.all(np.abs(p_new - pi) <= xtol, axis=-1)
-        finished = (better & ((rel < tol) | small_step)) | (~better & (lam > 1e10)) | (np.minimum(c, c_new) < 1e-30)
+        finished = (
+            (better & ((rel < tol) | small_step))
+            | (~better & (lam > 1e10))
+            | (np.minimum(c, c_new) < 1e-30)
+        )
         p[idx] = np.where(better[:, None], p_new, pi)
         r = np.where(better[:, None], r_new, r)
         J = np.where(better[:, None, None], J_new, J)
@@ -232,20 +281,36 @@ def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
     return p, cost, done, iterations
 
 
-def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bounds=None,
-             starts=DEFAULT_STARTS, sigma0: float = 0.3, max_iter: int = 200, tol: float = 1e-12,
-             **model_kw) -> DolpFit:
+def fit_dolp(
+    dolp,
+    theta_i,
+    theta_r,
+    phi=np.pi,
+    *,
+    sigma=None,
+    noise=None,
+    bounds=None,
+    starts=DEFAULT_STARTS,
+    sigma0: float = 0.3,
+    max_iter: int = 200,
+    tol: float = 1e-12,
+    **model_kw,
+) -> DolpFit:
     """Batched bounded least squares of (n, kappa[, sigma]) to DOLP measured at M geometries.
 
-    Every pixel runs a Levenberg-Marquardt iteration with its own damping, in one vectorised pass; the
-    Jacobian is analytic in (n, kappa) (:class:`~scatterlab.inversion.forward.DolpForward`). Each start of
+    Every pixel runs a Levenberg-Marquardt iteration with its own damping, in one vectorised pass;
+    the
+    Jacobian is analytic in (n, kappa) (:class:`~scatterlab.inversion.forward.DolpForward`). Each
+    start of
     ``starts`` is run for every pixel and the lowest cost wins per pixel.
 
     Parameters
     ----------
     dolp : array (..., M)
-        Measured DOLP in [0, 1]; NaN entries are masked. Infinite values, and values outside [0, 1] by more
-        than ``max(DOLP_MARGIN, 5 * noise)`` (0.05 without ``noise``), raise a ValueError: set them to NaN to
+        Measured DOLP in [0, 1]; NaN entries are masked. Infinite values, and values outside [0, 1]
+        by more
+        than ``max(DOLP_MARGIN, 5 * noise)`` (0.05 without ``noise``), raise a ValueError: set them
+        to NaN to
         leave them out.
     theta_i, theta_r : array (M,) [rad]
         M >= P, the number of fitted parameters.
@@ -253,9 +318,11 @@ def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bound
     sigma : float or array (...), optional
         Known roughness; when given only (n, kappa) are fitted.
     noise : float or array (...), optional
-        DOLP noise standard deviation (> 0) for the covariance (default: estimated from the residuals).
+        DOLP noise standard deviation (> 0) for the covariance (default: estimated from the
+        residuals).
     bounds : dict, optional
-        ``{"n": (lo, hi), "kappa": (lo, hi), "sigma": (lo, hi)}``; defaults in ``DEFAULT_BOUNDS``; another key
+        ``{"n": (lo, hi), "kappa": (lo, hi), "sigma": (lo, hi)}``; defaults in ``DEFAULT_BOUNDS``;
+        another key
         is a ValueError.
     starts : non-empty sequence of (n, kappa)
     sigma0 : float -- starting roughness.
@@ -264,47 +331,72 @@ def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bound
     Returns
     -------
     DolpFit
-        ``converged`` says the iteration stopped on its criteria; ``identifiable`` (..., P) says whether the
-        data determine each parameter at the solution (non-singular Fisher information, see
-        :func:`~scatterlab.inversion.design.inverse_information`). An undetermined parameter has an
-        infinite variance (NaN covariances), and an :class:`IdentifiabilityWarning` says how many pixels are
-        affected.
+        ``converged`` says the iteration stopped on its criteria; ``identifiable`` (..., P) says
+        whether the data determine each parameter at the solution (non-singular Fisher information,
+        see :func:`~scatterlab.inversion.design.inverse_information`). An undetermined parameter has
+        an infinite variance (NaN covariances), and an :class:`IdentifiabilityWarning` says how many
+        pixels are affected.
     """
     noise = check_noise(noise)
     margin = DOLP_MARGIN if noise is None else max(DOLP_MARGIN, 5 * float(np.max(noise)))
     y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi, margin=margin)
     starts = check_starts(starts)
     if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1 and tol > 0):
-        raise ValueError(f"max_iter must be a positive integer and tol > 0, got {max_iter!r}, {tol!r}")
+        raise ValueError(
+            f"max_iter must be a positive integer and tol > 0, got {max_iter!r}, {tol!r}"
+        )
     fit_sigma = sigma is None
     P = 3 if fit_sigma else 2
     if ti.size < P:
-        raise ValueError(f"dolp has {ti.size} geometries; at least {P} are needed to fit {P} parameters")
+        raise ValueError(
+            f"dolp has {ti.size} geometries; at least {P} are needed to fit {P} parameters"
+        )
     lo, hi = parameter_bounds(bounds, P)
-    batch = y.shape[:-1]
+    batch, M = y.shape[:-1], y.shape[-1]
     mask = np.isfinite(y)
     valid = mask.sum(-1) >= P
     sig_known = None if fit_sigma else np.broadcast_to(np.asarray(sigma, float), batch)
     forward = DolpForward(ti, tr, ph, sigma=None if fit_sigma else sig_known.ravel(), **model_kw)
-    M = y.shape[-1]
+    y0 = np.where(mask, y, 0.0).reshape(-1, M)
+    s0 = sigma0 if fit_sigma else None
     p, cost, done, iterations = _best_of_starts(
-        forward, np.where(mask, y, 0.0).reshape(-1, M), mask.reshape(-1, M), valid.ravel(), starts,
-        sigma0 if fit_sigma else None, lo, hi, max_iter, tol)
+        forward, y0, mask.reshape(-1, M), valid.ravel(), starts, s0, lo, hi, max_iter, tol
+    )
     p, cost, done = p.reshape(batch + (P,)), cost.reshape(batch), done.reshape(batch)
     cov, identifiable = _laplace_covariance(forward, p, mask, cost, noise)
-    nan = np.where(valid, 1.0, np.nan)
     identifiable = identifiable & valid[..., None]
-    undetermined = valid & ~np.all(identifiable, -1)
-    if np.any(undetermined):
-        names = [nm for k, nm in enumerate(PARAMETER_NAMES[:P]) if np.any(valid & ~identifiable[..., k])]
-        warnings.warn(f"the data do not determine {', '.join(names)} at {int(undetermined.sum())} of "
-                      f"{int(valid.sum())} fitted pixel(s) (singular Fisher information at the solution): their "
-                      "variance is reported as inf; see DolpFit.identifiable", IdentifiabilityWarning,
-                      stacklevel=2)
+    _warn_undetermined(valid, identifiable)
+    nan = np.where(valid, 1.0, np.nan)
     sig_out = p[..., 2] if fit_sigma else sig_known
-    return DolpFit(n=p[..., 0] * nan, kappa=p[..., 1] * nan, sigma=np.asarray(sig_out) * nan,
-                   covariance=cov * nan[..., None, None], cost=cost * nan, converged=done & valid,
-                   valid=valid, iterations=iterations, identifiable=identifiable)
+    return DolpFit(
+        n=p[..., 0] * nan,
+        kappa=p[..., 1] * nan,
+        sigma=np.asarray(sig_out) * nan,
+        covariance=cov * nan[..., None, None],
+        cost=cost * nan,
+        converged=done & valid,
+        valid=valid,
+        iterations=iterations,
+        identifiable=identifiable,
+    )
+
+
+def _warn_undetermined(valid, identifiable):
+    """An IdentifiabilityWarning naming the undetermined parameters and their pixel count."""
+    undetermined = valid & ~np.all(identifiable, -1)
+    if not np.any(undetermined):
+        return
+    P = identifiable.shape[-1]
+    names = [
+        nm for k, nm in enumerate(PARAMETER_NAMES[:P]) if np.any(valid & ~identifiable[..., k])
+    ]
+    warnings.warn(
+        f"the data do not determine {', '.join(names)} at {int(undetermined.sum())} of "
+        f"{int(valid.sum())} fitted pixel(s) (singular Fisher information at the solution): "
+        "their variance is reported as inf; see DolpFit.identifiable",
+        IdentifiabilityWarning,
+        stacklevel=3,
+    )
 
 
 def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, max_iter, tol):
@@ -331,24 +423,35 @@ def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, max_iter, 
 
 
 def _laplace_covariance(forward, p, mask, cost, noise):
-    """Laplace covariance s^2 (J^T J)^+ at the solutions ``p`` (..., P) and the identifiable parameters."""
+    """Laplace covariance s^2 (J^T J)^+ at the solutions ``p`` (..., P) and the identifiable
+    parameters."""
     batch, P = p.shape[:-1], p.shape[-1]
     _, J = forward.value_and_jacobian(p.reshape(-1, P))
     J = J.reshape(batch + J.shape[-2:])
     J = np.where(mask[..., None], J, 0.0)
     m = mask.sum(-1)
-    s2 = (noise ** 2 if noise is not None
-          else np.where(m > P, 2 * cost / np.maximum(m - P, 1), np.nan))
+    s2 = noise**2 if noise is not None else np.where(m > P, 2 * cost / np.maximum(m - P, 1), np.nan)
     A = np.einsum("...mi,...mj->...ij", J, J)
     cov, identifiable = inverse_information(A)
     return cov * np.asarray(s2)[..., None, None], identifiable
 
 
-def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=None,
-                       starts=DEFAULT_STARTS, sigma0: float = 0.3, **model_kw) -> DolpFit:
+def fit_dolp_per_pixel(
+    dolp,
+    theta_i,
+    theta_r,
+    phi=np.pi,
+    *,
+    sigma=None,
+    bounds=None,
+    starts=DEFAULT_STARTS,
+    sigma0: float = 0.3,
+    **model_kw,
+) -> DolpFit:
     """Baseline: one ``scipy.optimize.least_squares`` (trust-region reflective) per pixel and start.
 
-    Same forward model, analytic Jacobian, starts and bounds as :func:`fit_dolp`, so that comparing the two
+    Same forward model, analytic Jacobian, starts and bounds as :func:`fit_dolp`, so that comparing
+    the two
     measures batching alone. No covariance (NaN).
     """
     y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi)
@@ -365,7 +468,9 @@ def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=
         ok = np.isfinite(row)
         if ok.sum() < P:
             continue
-        fwd = DolpForward(ti[ok], tr[ok], ph[ok], sigma=None if fit_sigma else sig_flat[i], **model_kw)
+        fwd = DolpForward(
+            ti[ok], tr[ok], ph[ok], sigma=None if fit_sigma else sig_flat[i], **model_kw
+        )
         target = row[ok]
 
         def res(p, fwd=fwd, target=target):
@@ -377,7 +482,9 @@ def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=
         best = None
         for n0, k0 in starts:
             x0 = np.clip([n0, k0] + ([sigma0] if fit_sigma else []), lo + 1e-9, hi - 1e-9)
-            res_ = optimize.least_squares(res, x0, jac=jac, bounds=(lo, hi), xtol=1e-14, ftol=1e-14, gtol=1e-14)
+            res_ = optimize.least_squares(
+                res, x0, jac=jac, bounds=(lo, hi), xtol=1e-14, ftol=1e-14, gtol=1e-14
+            )
             if best is None or res_.cost < best.cost:
                 best = res_
         out[i, :P] = best.x
@@ -385,6 +492,13 @@ def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=
             out[i, 2] = sig_flat[i]
         cost[i] = best.cost
     valid = np.isfinite(cost).reshape(batch)
-    return DolpFit(n=out[:, 0].reshape(batch), kappa=out[:, 1].reshape(batch), sigma=out[:, 2].reshape(batch),
-                   covariance=np.full(batch + (P, P), np.nan), cost=cost.reshape(batch), converged=valid,
-                   valid=valid, iterations=0)
+    return DolpFit(
+        n=out[:, 0].reshape(batch),
+        kappa=out[:, 1].reshape(batch),
+        sigma=out[:, 2].reshape(batch),
+        covariance=np.full(batch + (P, P), np.nan),
+        cost=cost.reshape(batch),
+        converged=valid,
+        valid=valid,
+        iterations=0,
+    )

@@ -1,5 +1,8 @@
-"""Convergence diagnostics valid for an ensemble sampler (issue 14, item 4): R-hat between independent
-ensembles, tau-based effective sample sizes, the convergence flag with its reason, and the ArviZ export."""
+"""Convergence diagnostics valid for an ensemble sampler (issue 14, item 4): R-hat between
+independent
+ensembles, tau-based effective sample sizes, the convergence flag with its reason, and the ArviZ
+export.
+"""
 
 import warnings
 
@@ -20,7 +23,8 @@ TR = np.radians(np.r_[30, 35, 40, 45, 50, 55, 60, 20, 30, 60, 70])
 
 
 def ar1(rng, steps, walkers, rho, shift=0.0):
-    """Stationary AR(1) chains with unit variance: integrated autocorrelation time (1 + rho) / (1 - rho)."""
+    """Stationary AR(1) chains with unit variance: integrated autocorrelation time (1 + rho) / (1 -
+    rho)."""
     x = np.empty((steps, walkers))
     x[0] = rng.standard_normal(walkers)
     e = np.sqrt(1 - rho**2) * rng.standard_normal((steps, walkers))
@@ -30,7 +34,8 @@ def ar1(rng, steps, walkers, rho, shift=0.0):
 
 
 def test_effective_sample_size_of_ar1_chains_matches_the_analytic_tau():
-    """AR(1) with rho = 0.8 has tau = 9 exactly; 32 walkers x 4000 steps estimate it to a few per cent
+    """AR(1) with rho = 0.8 has tau = 9 exactly; 32 walkers x 4000 steps estimate it to a few per
+    cent
     (emcee's windowed estimator; tolerance 10 %)."""
     rng = np.random.default_rng(0)
     x = ar1(rng, 4000, 32, 0.8)
@@ -41,18 +46,27 @@ def test_effective_sample_size_of_ar1_chains_matches_the_analytic_tau():
 
 
 def test_ensemble_rhat_flags_ensembles_in_different_places_and_not_agreeing_ones():
-    """Two ensembles of correlated chains: R-hat - 1 ~ 1 / (2 ESS per half-ensemble) when they sample the same
-    distribution (here ~1e-3 < 0.01), and ~ shift^2 / 8 when one is displaced by 0.5 sd (0.03 > 0.01)."""
+    """Two ensembles of correlated chains: R-hat - 1 ~ 1 / (2 ESS per half-ensemble) when they
+    sample the same
+    distribution (here ~1e-3 < 0.01), and ~ shift^2 / 8 when one is displaced by 0.5 sd (0.03 >
+    0.01).
+    """
     rng = np.random.default_rng(1)
     same = np.concatenate([ar1(rng, 2000, 16, 0.8), ar1(rng, 2000, 16, 0.8)], axis=1)
     assert ensemble_rhat(same, 2)[0] < 1.01
     apart = np.concatenate([ar1(rng, 2000, 16, 0.8), ar1(rng, 2000, 16, 0.8, shift=0.5)], axis=1)
     assert ensemble_rhat(apart, 2)[0] > 1.02
-    # the walkers of one ensemble share its position: a walker-wise split R-hat cannot see a second ensemble
+    # the walkers of one ensemble share its position: a walker-wise split R-hat cannot see a second
+    # ensemble
     # stuck elsewhere once each ensemble's walkers agree among themselves, the ensemble R-hat can
     common = rng.standard_normal((2000, 1, 1))
-    stuck = np.concatenate([common + 0.01 * rng.standard_normal((2000, 16, 1)),
-                            common + 3 + 0.01 * rng.standard_normal((2000, 16, 1))], axis=1)
+    stuck = np.concatenate(
+        [
+            common + 0.01 * rng.standard_normal((2000, 16, 1)),
+            common + 3 + 0.01 * rng.standard_normal((2000, 16, 1)),
+        ],
+        axis=1,
+    )
     assert ensemble_rhat(stuck, 2)[0] > 1.5 and split_rhat(stuck[:, :16])[0] < 1.01
     assert np.isnan(ensemble_rhat(same[:3], 2)[0])
 
@@ -74,8 +88,10 @@ def test_posterior_reports_ess_rhat_and_why_it_is_not_converged():
 
 
 def test_inference_data_export_agrees_with_arviz_own_diagnostics():
-    """ArviZ's ESS (walkers as chains, Geyer's initial-monotone estimator) is a peer estimate of the same
-    quantity as ours (emcee's windowed tau): they agree within a factor of two on a converged run."""
+    """ArviZ's ESS (walkers as chains, Geyer's initial-monotone estimator) is a peer estimate of the
+    same
+    quantity as ours (emcee's windowed tau): they agree within a factor of two on a converged run.
+    """
     import arviz as az
 
     rng = np.random.default_rng(4)

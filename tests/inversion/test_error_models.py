@@ -1,6 +1,9 @@
-"""The two likelihood extensions for honest pipeline posteriors: a known systematic error per geometry added
-in quadrature, and a full DOLP error covariance. Checked against a linear-Gaussian toy whose posterior is known
-in closed form, against scipy's multivariate normal density, and against the generalised-least-squares
+"""The two likelihood extensions for honest pipeline posteriors: a known systematic error per
+geometry added
+in quadrature, and a full DOLP error covariance. Checked against a linear-Gaussian toy whose
+posterior is known
+in closed form, against scipy's multivariate normal density, and against the
+generalised-least-squares
 (Laplace) covariance of the DOLP model in its Gaussian regime."""
 
 import warnings
@@ -45,22 +48,44 @@ def test_log_likelihood_equals_the_multivariate_normal_density_up_to_a_constant(
     ok = np.isfinite(y)
     for kind in ("covariance", "known", "inferred"):
         if kind == "covariance":
-            lp = DolpLogPosterior(Linear(A), y, lo, hi, fit_sigma=True, log_kappa=False, noise=None,
-                                  systematic=t, covariance=C)
+            lp = DolpLogPosterior(
+                Linear(A),
+                y,
+                lo,
+                hi,
+                fit_sigma=True,
+                log_kappa=False,
+                noise=None,
+                systematic=t,
+                covariance=C,
+            )
             x, V = p, [C[np.ix_(ok, ok)] + np.diag(t[ok] ** 2)] * len(p)
         elif kind == "known":
-            lp = DolpLogPosterior(Linear(A), y, lo, hi, fit_sigma=True, log_kappa=False, noise=0.01, systematic=t)
+            lp = DolpLogPosterior(
+                Linear(A), y, lo, hi, fit_sigma=True, log_kappa=False, noise=0.01, systematic=t
+            )
             x, V = p, [np.diag(0.01**2 + t[ok] ** 2)] * len(p)
         else:  # the noise is a parameter: its log is the last sampler coordinate
             s = rng.uniform(0.005, 0.05, len(p))
-            lp = DolpLogPosterior(Linear(A), y, np.r_[lo, -20], np.r_[hi, 0], fit_sigma=True, log_kappa=False,
-                                  noise=None, systematic=t)
+            lp = DolpLogPosterior(
+                Linear(A),
+                y,
+                np.r_[lo, -20],
+                np.r_[hi, 0],
+                fit_sigma=True,
+                log_kappa=False,
+                noise=None,
+                systematic=t,
+            )
             x, V = np.c_[p, np.log(s)], [np.diag(si**2 + t[ok] ** 2) for si in s]
         ours = lp(x)
-        ref = np.array([stats.multivariate_normal(p[k] @ A[ok].T, V[k]).logpdf(y[ok]) for k in range(len(p))])
+        ref = np.array(
+            [stats.multivariate_normal(p[k] @ A[ok].T, V[k]).logpdf(y[ok]) for k in range(len(p))]
+        )
         d = ours - ref  # a constant (the dropped normalisation, fixed when the error model is)
         if kind == "inferred":
-            # the same constant for every noise level: only 0.5 m log(2 pi) is dropped, never log det V
+            # the same constant for every noise level: only 0.5 m log(2 pi) is dropped, never log
+            # det V
             np.testing.assert_allclose(d, 0.5 * ok.sum() * np.log(2 * np.pi), rtol=1e-10)
         else:
             np.testing.assert_allclose(d - d[0], 0.0, atol=1e-9)
@@ -68,15 +93,26 @@ def test_log_likelihood_equals_the_multivariate_normal_density_up_to_a_constant(
 
 def test_linear_gaussian_toy_posterior_is_the_analytic_one():
     """y = A p + e, e ~ N(0, C + diag(t^2)), flat prior: the posterior is N((A'V^-1A)^-1 A'V^-1 y,
-    (A'V^-1A)^-1). Sampled means agree within 4 posterior sd / sqrt(ESS) and sds within 10 % (ESS ~ 3000)."""
+    (A'V^-1A)^-1). Sampled means agree within 4 posterior sd / sqrt(ESS) and sds within 10 % (ESS ~
+    3000).
+    """
     rng = np.random.default_rng(1)
     A = rng.normal(size=(M, 3))
     C, t = correlated(M, 0.05, 0.8), np.linspace(0, 0.05, M)
     V = C + np.diag(t**2)
     truth = np.array([0.3, -0.2, 0.5])
     y = A @ truth + np.linalg.cholesky(V) @ rng.standard_normal(M)
-    lp = DolpLogPosterior(Linear(A), y, np.full(3, -20.0), np.full(3, 20.0), fit_sigma=True, log_kappa=False,
-                          noise=None, systematic=t, covariance=C)
+    lp = DolpLogPosterior(
+        Linear(A),
+        y,
+        np.full(3, -20.0),
+        np.full(3, 20.0),
+        fit_sigma=True,
+        log_kappa=False,
+        noise=None,
+        systematic=t,
+        covariance=C,
+    )
     Vi = np.linalg.inv(V)
     cov = np.linalg.inv(A.T @ Vi @ A)
     mean = cov @ A.T @ Vi @ y
@@ -93,12 +129,15 @@ def test_linear_gaussian_toy_posterior_is_the_analytic_one():
 @pytest.mark.parametrize("model", ["systematic", "covariance"])
 def test_dolp_posterior_width_follows_the_error_model_in_the_gaussian_regime(model):
     """Paint with errors of 3e-4: the posterior is nearly Gaussian, so its sds equal the generalised
-    least-squares errors sqrt(diag((J'V^-1J)^-1)) at the truth (within 10 %: 2 x 32 walkers x 1200 steps,
+    least-squares errors sqrt(diag((J'V^-1J)^-1)) at the truth (within 10 %: 2 x 32 walkers x 1200
+    steps,
     ESS ~ 2000 per parameter, plus the curvature between the truth and the data's optimum)."""
     rng = np.random.default_rng(7)
     truth = (1.39, 0.34, 0.3)
     if model == "systematic":
-        t = np.r_[np.full(7, 1e-4), np.full(4, 6e-4)]  # the off-specular geometries are poorly modelled
+        t = np.r_[
+            np.full(7, 1e-4), np.full(4, 6e-4)
+        ]  # the off-specular geometries are poorly modelled
         V, kw, noise = np.diag(2e-4**2 + t**2), {"systematic": t}, 2e-4
     else:
         V = correlated(M, 3e-4, 0.9)
@@ -107,7 +146,10 @@ def test_dolp_posterior_width_follows_the_error_model_in_the_gaussian_regime(mod
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         post = sample_posterior(y, TI, TR, noise, rng, n_steps=1200, **kw)
-    _, J = DolpForward(TI, TR)(np.array(truth)), DolpForward(TI, TR).value_and_jacobian(np.array(truth))[1]
+    _, J = (
+        DolpForward(TI, TR)(np.array(truth)),
+        DolpForward(TI, TR).value_and_jacobian(np.array(truth))[1],
+    )
     gls = np.sqrt(np.diag(np.linalg.inv(J.T @ np.linalg.solve(V, J))))
     np.testing.assert_allclose(post.samples.std(0), gls, rtol=0.1)
     naive = np.sqrt(np.diag(np.linalg.inv(J.T @ J))) * np.sqrt(np.mean(np.diag(V)))
@@ -117,17 +159,22 @@ def test_dolp_posterior_width_follows_the_error_model_in_the_gaussian_regime(mod
 
 
 def test_defaults_are_unchanged_and_per_problem_error_models():
-    """systematic = 0 is the default likelihood exactly; sample_posteriors takes one error model per row."""
+    """systematic = 0 is the default likelihood exactly; sample_posteriors takes one error model per
+    row."""
     rng = np.random.default_rng(2)
     y = model_dolp(1.39, 0.34, 0.3, TI, TR) + 2e-3 * rng.standard_normal(M)
     lo, hi = np.r_[0, 0, 0.01, -12], np.r_[5, 25, 1.5, 0]
     fwd = DolpForward(TI, TR)
     x = np.c_[rng.uniform([1, 0, 0.1], [2, 1, 0.5], (5, 3)), np.log(rng.uniform(1e-3, 1e-2, 5))]
     a = DolpLogPosterior(fwd, y, lo, hi, fit_sigma=True, log_kappa=False, noise=None)(x)
-    b = DolpLogPosterior(fwd, y, lo, hi, fit_sigma=True, log_kappa=False, noise=None, systematic=np.zeros(M))(x)
+    b = DolpLogPosterior(
+        fwd, y, lo, hi, fit_sigma=True, log_kappa=False, noise=None, systematic=np.zeros(M)
+    )(x)
     s = np.exp(x[:, -1])
     chi2 = np.sum((fwd(x[:, :3]) - y) ** 2, -1)
-    np.testing.assert_allclose(a, -0.5 * chi2 / s**2 - M * np.log(s), rtol=1e-12)  # the old likelihood
+    np.testing.assert_allclose(
+        a, -0.5 * chi2 / s**2 - M * np.log(s), rtol=1e-12
+    )  # the old likelihood
     np.testing.assert_array_equal(a, b)
     ys = np.stack([y, y])
     syst = np.stack([np.zeros(M), np.full(M, 5e-3)])

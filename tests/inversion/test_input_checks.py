@@ -1,4 +1,5 @@
-"""Issue 20 for the inversion: bad input is refused with a message naming the argument, and a design that
+"""Issue 20 for the inversion: bad input is refused with a message naming the argument, and a design
+that
 cannot determine the parameters is reported as such (never a confident answer)."""
 
 import warnings
@@ -67,8 +68,10 @@ def test_fit_dolp_refuses_empty_starts_and_misspelled_bounds():
 
 
 def test_seven_copies_of_one_geometry_determine_nothing():
-    """Issue 20's reproducer: seven copies of the 45 deg geometry carry the information of one measurement,
-    a rank-1 Fisher matrix, so none of the three parameters is determined (crlb inf). The fit used to report
+    """Issue 20's reproducer: seven copies of the 45 deg geometry carry the information of one
+    measurement,
+    a rank-1 Fisher matrix, so none of the three parameters is determined (crlb inf). The fit used
+    to report
     n = 0.207 +- 0.086; now every parameter is flagged and its variance is inf, with a warning."""
     ti = tr = np.full(7, np.radians(45.0))
     truth = (1.44, 16.0, 0.2)
@@ -81,14 +84,17 @@ def test_seven_copies_of_one_geometry_determine_nothing():
 
 
 def test_glass_kappa_zero_is_undetermined_but_n_and_sigma_keep_finite_errors():
-    """At kappa = 0 the DOLP is stationary in kappa (zero information): kappa is flagged, while n and sigma
+    """At kappa = 0 the DOLP is stationary in kappa (zero information): kappa is flagged, while n
+    and sigma
     keep the errors they would have with kappa known (the information is block-diagonal)."""
     y = model_dolp(1.5, 0.0, 0.4, TI, TR)
     with pytest.warns(IdentifiabilityWarning, match="kappa"):
         fit = fit_dolp(y, TI, TR, noise=1e-3)
     assert fit.identifiable.tolist() == [True, False, True]
     assert np.isinf(fit.errors[1]) and np.all(np.isfinite(fit.errors[[0, 2]]))
-    np.testing.assert_allclose(fit.errors[[0, 2]], crlb(1.5, 0.0, 0.4, TI, TR, 1e-3)[[0, 2]], rtol=1e-3)
+    np.testing.assert_allclose(
+        fit.errors[[0, 2]], crlb(1.5, 0.0, 0.4, TI, TR, 1e-3)[[0, 2]], rtol=1e-3
+    )
 
 
 def test_inverse_information_against_hand_made_matrices():
@@ -159,4 +165,6 @@ def test_rng_takes_what_default_rng_takes_and_moves_and_backends_as_emcee_object
     # the report takes rng too: the same seed gives the same predictive figure
     posterior_report(a, tmp_path / "1", "p", rng=3)
     posterior_report(a, tmp_path / "2", "p", rng=3)
-    assert (tmp_path / "1" / "p_predictive.png").read_bytes() == (tmp_path / "2" / "p_predictive.png").read_bytes()
+    assert (tmp_path / "1" / "p_predictive.png").read_bytes() == (
+        tmp_path / "2" / "p_predictive.png"
+    ).read_bytes()
