@@ -80,14 +80,14 @@ def sample(ctx, y, kw):
             TR,
             kw.pop("noise"),
             ctx.rng,
-            n_steps=600 if ctx.quick else None,
+            n_steps=400 if ctx.quick else None,
             executor=ctx.executor,
             **kw,
         )
 
 
 def run(ctx):
-    trials = 12 if ctx.quick else 200
+    trials = 8 if ctx.quick else 200
     pyplot = plt()
     fig, axes = pyplot.subplots(1, len(CASES), figsize=(15, 4.2))
     se = np.sqrt(LEVELS * (1 - LEVELS) / trials)

@@ -289,6 +289,8 @@ def fit_dolp(
     *,
     sigma=None,
     noise=None,
+    systematic=None,
+    covariance=None,
     bounds=None,
     starts=DEFAULT_STARTS,
     sigma0: float = 0.3,
@@ -320,10 +322,16 @@ def fit_dolp(
     noise : float or array (...), optional
         DOLP noise standard deviation (> 0) for the covariance (default: estimated from the
         residuals).
+    systematic : float or array (M,), optional
+        Known systematic DOLP error standard deviation per geometry, added in quadrature to
+        ``noise`` (which must then be a scalar) or to ``covariance``: the fit is weighted
+        (generalised least squares) and the covariance is in absolute units.
+    covariance : array (M, M), optional
+        Full DOLP error covariance (errors correlated across geometries), used instead of ``noise``:
+        residuals are whitened with its Cholesky factor. NaN entries of ``dolp`` are then refused.
     bounds : dict, optional
         ``{"n": (lo, hi), "kappa": (lo, hi), "sigma": (lo, hi)}``; defaults in ``DEFAULT_BOUNDS``;
-        another key
-        is a ValueError.
+        another key is a ValueError.
     starts : non-empty sequence of (n, kappa)
     sigma0 : float -- starting roughness.
     max_iter, tol : Levenberg-Marquardt limits (iterations per start; relative cost decrease).
@@ -358,6 +366,11 @@ def fit_dolp(
     sig_known = None if fit_sigma else np.broadcast_to(np.asarray(sigma, float), batch)
     forward = DolpForward(ti, tr, ph, sigma=None if fit_sigma else sig_known.ravel(), **model_kw)
     y0 = np.where(mask, y, 0.0).reshape(-1, M)
+    whiten = _whitening(noise, systematic, covariance, mask)
+    if (
+        whiten is not None
+    ):  # generalised least squares: residuals in units of their standard deviation
+        forward, y0, noise = _Whitened(forward, whiten), y0 @ whiten.T, np.asarray(1.0)
     s0 = sigma0 if fit_sigma else None
     p, cost, done, iterations = _best_of_starts(
         forward, y0, mask.reshape(-1, M), valid.ravel(), starts, s0, lo, hi, max_iter, tol
@@ -420,6 +433,51 @@ def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, max_iter, 
             best_done = np.where(take, done, best_done)
             best_cost = np.where(take, cost, best_cost)
     return best_p, best_cost, best_done, total_iter
+
+
+def _whitening(noise, systematic, covariance, mask):
+    """Inverse Cholesky factor (M, M) of the DOLP error covariance, or None (unweighted fit)."""
+    if systematic is None and covariance is None:
+        return None
+    M = mask.shape[-1]
+    if covariance is not None:
+        if noise is not None:
+            raise ValueError(
+                "give either noise or covariance (the full DOLP error covariance), not both"
+            )
+        V = np.asarray(covariance, float)
+        if V.shape != (M, M) or not np.all(np.isfinite(V)) or not np.allclose(V, V.T, rtol=1e-10):
+            raise ValueError(f"covariance must be a finite symmetric ({M}, {M}) matrix")
+        if not np.all(mask):
+            raise ValueError("covariance with missing (NaN) dolp entries: use sample_posterior")
+    elif noise is None or np.ndim(noise):
+        raise ValueError("systematic needs a scalar noise (or a covariance) to weight the fit")
+    else:
+        V = np.eye(M) * float(noise) ** 2
+    t = np.zeros(M) if systematic is None else np.asarray(systematic, float)
+    if not (np.ndim(t) == 0 or t.shape == (M,)) or not np.all(np.isfinite(t) & (t >= 0)):
+        raise ValueError(
+            f"systematic must be a float or an array ({M},) of standard deviations >= 0"
+        )
+    try:
+        L = np.linalg.cholesky(V + np.diag(np.broadcast_to(t, (M,)) ** 2))
+    except np.linalg.LinAlgError as exc:
+        raise ValueError("covariance must be positive definite") from exc
+    return np.linalg.inv(L)
+
+
+class _Whitened:
+    """A forward model whose values and Jacobian are multiplied by a whitening matrix (M, M)."""
+
+    def __init__(self, forward, W):
+        self.forward, self.W = forward, W
+
+    def __call__(self, params, rows=None):
+        return self.forward(params, rows) @ self.W.T
+
+    def value_and_jacobian(self, params, rows=None):
+        f, J = self.forward.value_and_jacobian(params, rows)
+        return f @ self.W.T, np.einsum("ij,...jk->...ik", self.W, J)
 
 
 def _laplace_covariance(forward, p, mask, cost, noise):

@@ -12,7 +12,13 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from scatterlab.inversion import ConvergenceWarning, model_dolp, sample_posterior, sample_posteriors
+from scatterlab.inversion import (
+    ConvergenceWarning,
+    fit_dolp,
+    model_dolp,
+    sample_posterior,
+    sample_posteriors,
+)
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.inversion.posterior import DolpLogPosterior, SamplerOptions, run_ensembles
 
@@ -181,3 +187,34 @@ def test_defaults_are_unchanged_and_per_problem_error_models():
     posts = sample_posteriors(ys, TI, TR, 2e-3, 3, n_steps=60, n_ensembles=1, systematic=syst)
     assert posts[0].systematic.max() == 0 and posts[1].systematic.min() == 5e-3
     assert posts[1].data_error()[0] == pytest.approx(np.hypot(2e-3, 5e-3))
+
+
+@pytest.mark.parametrize("model", ["systematic", "covariance"])
+def test_weighted_least_squares_errors_match_monte_carlo_and_beat_unweighted(model):
+    """fit_dolp with the same error models: 300 noisy data sets (iron, errors ~1e-4, Gaussian
+    regime); the Laplace errors equal the GLS bound sqrt(diag((J'V^-1J)^-1)) at the truth (2 %) and
+    the scatter of the estimates (within 20 %: 300 draws know a sd to ~4 %, plus the spread of the
+    errors over draws); by Gauss-Markov the weighted estimates scatter no more than the unweighted
+    ones (5 % slack). Measured (covariance): Laplace/GLS 0.997-0.998, scatter/GLS 1.05-1.07,
+    weighted/unweighted scatter 0.83."""
+    rng = np.random.default_rng(11)
+    truth = (3.6, 5.88, 0.3)
+    if model == "systematic":
+        t = np.r_[np.full(7, 2e-5), np.full(4, 4e-4)]
+        V, kw = np.diag(1e-4**2 + t**2), {"noise": 1e-4, "systematic": t}
+    else:
+        V, kw = correlated(M, 1e-4, 0.9), {"covariance": correlated(M, 1e-4, 0.9)}
+    y = model_dolp(*truth, TI, TR) + rng.standard_normal((300, M)) @ np.linalg.cholesky(V).T
+    fit = fit_dolp(y, TI, TR, starts=((3.0, 4.0),), **kw)
+    plain = fit_dolp(y, TI, TR, starts=((3.0, 4.0),))
+    J = DolpForward(TI, TR).value_and_jacobian(np.array(truth))[1]
+    gls = np.sqrt(np.diag(np.linalg.inv(J.T @ np.linalg.solve(V, J))))
+    np.testing.assert_allclose(np.median(fit.errors, 0), gls, rtol=0.02)
+    est = np.stack([fit.n, fit.kappa, fit.sigma], -1)
+    np.testing.assert_allclose(est.std(0, ddof=1), gls, rtol=0.2)
+    ols = np.stack([plain.n, plain.kappa, plain.sigma], -1).std(0, ddof=1)
+    assert np.all(est.std(0, ddof=1) <= 1.05 * ols)
+    with pytest.raises(ValueError, match="systematic"):
+        fit_dolp(y, TI, TR, systematic=1e-3)
+    with pytest.raises(ValueError, match="covariance"):
+        fit_dolp(y, TI, TR, noise=1e-3, covariance=V)
