@@ -1,21 +1,18 @@
 """Calibration of the posterior credible intervals: empirical coverage against nominal level.
 
+(Not named coverage.py: with studies/ on sys.path that name shadowed the `coverage` package that
+numba, imported by arviz through corner, probes.)
+
 Repeated synthetic experiments with known truth (paint 1.39 - j0.34 and iron 3.6 - j5.88, sigma 0.3,
-11
-geometries: specular 30-60 deg plus an off-specular sweep at theta_i = 45 deg, DOLP noise 2e-3): for
-each
-nominal level, the fraction of trials whose equal-tailed interval contains the truth, per parameter,
-with the
-binomial standard error band. Calibrated intervals lie on the diagonal.
+11 geometries: specular 30-60 deg plus an off-specular sweep at theta_i = 45 deg, DOLP noise 2e-3):
+for each nominal level, the fraction of trials whose equal-tailed interval contains the truth, per
+parameter, with the binomial standard error band. Calibrated intervals lie on the diagonal.
 
 A third case checks the likelihood extensions the characterization pipeline relies on: paint whose
-DOLP errors
-are correlated across geometries (sd 2e-3, correlation 0.7^|i-j|) plus a systematic error of 1e-3 on
-the four
-off-specular geometries, sampled with ``covariance`` and ``systematic``. In full mode the same data
-are also
-sampled with the naive independent noise of the same size, to show what ignoring the correlation
-costs.
+DOLP errors are correlated across geometries (sd 2e-3, correlation 0.7^|i-j|) plus a systematic
+error of 1e-3 on the four off-specular geometries, sampled with ``covariance`` and ``systematic``. In full
+mode the same data are also sampled with the naive independent noise of the same size, to show what
+ignoring the correlation costs.
 """
 
 import sys
