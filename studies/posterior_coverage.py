@@ -10,9 +10,9 @@ parameter, with the binomial standard error band. Calibrated intervals lie on th
 
 A third case checks the likelihood extensions the characterization pipeline relies on: paint whose
 DOLP errors are correlated across geometries (sd 2e-3, correlation 0.7^|i-j|) plus a systematic
-error of 1e-3 on the four off-specular geometries, sampled with ``covariance`` and ``systematic``. In full
-mode the same data are also sampled with the naive independent noise of the same size, to show what
-ignoring the correlation costs.
+error of 1e-3 on the four off-specular geometries, sampled with ``covariance`` and ``systematic``.
+In full mode the same data are also sampled with the naive independent noise of the same size, to
+show what ignoring the correlation costs.
 """
 
 import sys
