@@ -1,20 +1,24 @@
-"""Inversion of (n, kappa, sigma) from multi-geometry DOLP (Sec. 3.1.2.3, Eqs. 115-117; Sec. 7.2, Eqs. 199-204).
+"""Inversion of (n, kappa, sigma) from multi-geometry DOLP (Sec. 3.1.2.3, Eqs. 115-117; Sec. 7.2,
+Eqs. 199-204).
 
 * :func:`fit_dolp` -- batched bounded least squares over leading axes (whole images at once);
   :func:`fit_dolp_per_pixel` is the per-pixel scipy baseline;
-* :func:`thilak_two_step` -- Thilak et al.'s two-step method (Eqs. 116-117), the comparison baseline;
+* :func:`thilak_two_step` -- Thilak et al.'s two-step method (Eqs. 116-117), the comparison
+baseline;
 * :func:`sample_posterior` / :func:`sample_posteriors` -- emcee posterior sampling with diagnostics,
   multimodality detection and HDF5 checkpoints;
 * :func:`fisher_information`, :func:`crlb` -- experiment design;
 * :func:`scatterlab.inversion.report.posterior_report` -- corner, traces, predictive band, tables.
 """
 
-from scatterlab.inversion.design import crlb, fisher_information
+from scatterlab.inversion.design import crlb, fisher_information, inverse_information
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.inversion.least_squares import (
     DEFAULT_BOUNDS,
     DEFAULT_STARTS,
+    DOLP_MARGIN,
     DolpFit,
+    IdentifiabilityWarning,
     fit_dolp,
     fit_dolp_per_pixel,
     model_dolp,
@@ -22,6 +26,10 @@ from scatterlab.inversion.least_squares import (
 from scatterlab.inversion.posterior import (
     ConvergenceWarning,
     Posterior,
+    PriorOptions,
+    SamplerOptions,
+    effective_sample_size,
+    ensemble_rhat,
     local_minima,
     sample_posterior,
     sample_posteriors,
@@ -29,6 +37,29 @@ from scatterlab.inversion.posterior import (
 )
 from scatterlab.inversion.thilak import ThilakFit, thilak_two_step
 
-__all__ = ["fit_dolp", "fit_dolp_per_pixel", "DolpFit", "model_dolp", "DEFAULT_BOUNDS", "DEFAULT_STARTS",
-           "DolpForward", "sample_posterior", "sample_posteriors", "Posterior", "ConvergenceWarning",
-           "local_minima", "split_rhat", "thilak_two_step", "ThilakFit", "fisher_information", "crlb"]
+__all__ = [
+    "fit_dolp",
+    "fit_dolp_per_pixel",
+    "DolpFit",
+    "model_dolp",
+    "DEFAULT_BOUNDS",
+    "DEFAULT_STARTS",
+    "DOLP_MARGIN",
+    "IdentifiabilityWarning",
+    "DolpForward",
+    "sample_posterior",
+    "sample_posteriors",
+    "Posterior",
+    "PriorOptions",
+    "SamplerOptions",
+    "ConvergenceWarning",
+    "local_minima",
+    "split_rhat",
+    "ensemble_rhat",
+    "effective_sample_size",
+    "thilak_two_step",
+    "ThilakFit",
+    "fisher_information",
+    "crlb",
+    "inverse_information",
+]

@@ -1,15 +1,22 @@
-r"""Least-squares inversion of (n, kappa, sigma) from multi-geometry DOLP (Sec. 7.2.2, Eqs. 199-204).
+r"""Least-squares inversion of (n, kappa, sigma) from multi-geometry DOLP (Sec. 7.2.2, Eqs.
+199-204).
 
-The forward model is the pBRDF DOLP of :class:`scatterlab.pbrdf.Model` (Eq. 203 in the specular plane).
+The forward model is the pBRDF DOLP of :class:`scatterlab.pbrdf.Model` (Eq. 203 in the specular
+plane).
 :func:`fit_dolp` solves, for every pixel of a batch at once,
 
-.. math:: \min_{n,\kappa,\sigma} \sum_j [\mathcal P^{thy}(n - j\kappa, \sigma; \theta_{i,j}, \theta_{r,j}, \phi_j) - \mathcal P_j]^2
+.. math:: \min_{n,\kappa,\sigma} \sum_j [\mathcal P^{thy}(n - j\kappa, \sigma; \theta_{i,j},
+\theta_{r,j}, \phi_j) - \mathcal P_j]^2
 
 with a vectorised Levenberg-Marquardt iteration in numpy (analytic Jacobian, per-pixel damping,
-bounds by projection), from several starting points so that the metal/dielectric ambiguity does not trap a
-pixel in a local minimum; the best start wins per pixel. NaN measurements are masked (left out of the
-residuals); a pixel with fewer valid measurements than unknowns is reported, not fitted. The parameter
-covariance is the Laplace approximation :math:`s^2 (J^TJ)^{-1}` at the solution (``noise`` given: its
+bounds by projection), from several starting points so that the metal/dielectric ambiguity does not
+trap a
+pixel in a local minimum; the best start wins per pixel. NaN measurements are masked (left out of
+the
+residuals); a pixel with fewer valid measurements than unknowns is reported, not fitted. The
+parameter
+covariance is the Laplace approximation :math:`s^2 (J^TJ)^{-1}` at the solution (``noise`` given:
+its
 variance instead of the residual variance). :func:`fit_dolp_per_pixel` is the per-pixel
 ``scipy.optimize.least_squares`` baseline.
 
@@ -18,19 +25,40 @@ Default bounds follow the reference (n in [0, 5], kappa in [0, 25]); sigma in [0
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import optimize
 
 from scatterlab._checks import as_angle
+from scatterlab.inversion.design import inverse_information
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.pbrdf import Model
 
-__all__ = ["fit_dolp", "fit_dolp_per_pixel", "DolpFit", "model_dolp", "DEFAULT_BOUNDS", "DEFAULT_STARTS"]
+__all__ = [
+    "fit_dolp",
+    "fit_dolp_per_pixel",
+    "DolpFit",
+    "model_dolp",
+    "DEFAULT_BOUNDS",
+    "DEFAULT_STARTS",
+    "DOLP_MARGIN",
+    "IdentifiabilityWarning",
+    "prepare_data",
+    "parameter_bounds",
+    "check_starts",
+    "check_noise",
+]
 
+PARAMETER_NAMES = ("n", "kappa", "sigma")
 DEFAULT_BOUNDS = {"n": (0.0, 5.0), "kappa": (0.0, 25.0), "sigma": (0.01, 1.5)}
 DEFAULT_STARTS = ((1.5, 0.05), (1.3, 3.0), (3.0, 4.0), (1.0, 10.0), (1.5, 18.0))
+DOLP_MARGIN = 0.05  # how far outside [0, 1] a measured DOLP may fall (noise) before it is refused
+
+
+class IdentifiabilityWarning(UserWarning):
+    """The data do not determine some parameter (singular Fisher information at the solution)."""
 
 
 def model_dolp(n, kappa, sigma, theta_i, theta_r, phi=np.pi, **model_kw) -> np.ndarray:
@@ -53,6 +81,10 @@ class DolpFit:
     converged : ndarray of bool
     valid : ndarray of bool -- enough finite measurements to fit.
     iterations : int
+    identifiable : ndarray of bool (..., P) or None
+        Whether the data determine each parameter at the solution; an unidentifiable parameter has
+        an
+        infinite variance in ``covariance`` (NaN covariances), never a silently finite one.
     """
 
     n: np.ndarray
@@ -63,6 +95,7 @@ class DolpFit:
     converged: np.ndarray
     valid: np.ndarray
     iterations: int
+    identifiable: np.ndarray | None = None
 
     @property
     def eta(self) -> np.ndarray:
@@ -74,36 +107,121 @@ class DolpFit:
         return np.sqrt(np.clip(np.diagonal(self.covariance, axis1=-2, axis2=-1), 0, None))
 
 
-def _prepare(dolp, theta_i, theta_r, phi):
-    y = np.asarray(dolp, float)
+def prepare_data(dolp, theta_i, theta_r, phi=np.pi, *, margin: float = DOLP_MARGIN):
+    """Validate DOLP data and geometries; returns ``(dolp (..., M), theta_i (M,), theta_r (M,), phi
+    (M,))``.
+
+    NaN entries of ``dolp`` are kept (they mark missing measurements). Infinite entries, and finite
+    ones
+    outside ``[-margin, 1 + margin]`` (a DOLP is in [0, 1]; ``margin`` allows for noise), raise a
+    ValueError
+    naming ``dolp``. Shared by the least-squares fit, the posterior sampler and the design
+    functions.
+    """
+    try:
+        y = np.asarray(dolp, float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"dolp must be numeric, got {dolp!r}") from exc
     ti = as_angle(theta_i, "theta_i").ravel()
     tr = as_angle(theta_r, "theta_r").ravel()
-    ph = np.broadcast_to(np.asarray(phi, float), ti.shape)
+    try:
+        ph = np.broadcast_to(np.asarray(phi, float), ti.shape)
+    except ValueError as exc:
+        raise ValueError(f"phi must be a float or one value per geometry ({ti.size})") from exc
     if ti.shape != tr.shape:
         raise ValueError("theta_i and theta_r must have one entry per measured geometry")
+    if not np.all(np.isfinite(ph)):
+        raise ValueError("phi must be finite [rad]")
     if y.shape[-1:] != ti.shape:
-        raise ValueError(f"dolp must have shape (..., {ti.size}) (one value per geometry), got {y.shape}")
+        raise ValueError(
+            f"dolp must have shape (..., {ti.size}) (one value per geometry), got {y.shape}"
+        )
+    if np.any(np.isinf(y)):
+        raise ValueError(
+            "dolp must be finite or NaN (NaN marks a missing measurement); got an infinite value"
+        )
+    if not (np.isfinite(margin) and margin >= 0):
+        raise ValueError(f"margin must be a non-negative float, got {margin!r}")
+    bad = np.isfinite(y) & ((y < -margin) | (y > 1 + margin))
+    if np.any(bad):
+        raise ValueError(
+            f"dolp must be in [0, 1] (within the noise margin {margin:g}); got "
+            f"{int(bad.sum())} value(s) outside, e.g. {y[bad].ravel()[0]:.4g}. Set them to NaN to "
+            "leave them out"
+        )
     return y, ti, tr, ph
 
 
-def _bounds(bounds, P):
-    b = dict(DEFAULT_BOUNDS, **(bounds or {}))
-    for name, (lo, hi) in b.items():
-        if not lo < hi:
-            raise ValueError(f"bounds[{name!r}] must be (low, high) with low < high, got {(lo, hi)}")
+def parameter_bounds(bounds, P: int):
+    """Validated lower and upper bounds ``(lo (P,), hi (P,))`` of (n, kappa[, sigma]).
+
+    ``bounds`` maps any of ``"n"``, ``"kappa"``, ``"sigma"`` to ``(low, high)``; missing names take
+    :data:`DEFAULT_BOUNDS`. An unknown name raises a ValueError naming it and the allowed ones.
+    """
+    bounds = dict(bounds or {})
+    unknown = sorted(set(bounds) - set(DEFAULT_BOUNDS))
+    if unknown:
+        raise ValueError(
+            f"bounds has unknown key(s) {unknown}; allowed keys are {sorted(DEFAULT_BOUNDS)}"
+        )
+    b = dict(DEFAULT_BOUNDS, **bounds)
+    for name, pair in b.items():
+        try:
+            lo, hi = (float(v) for v in pair)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"bounds[{name!r}] must be (low, high), got {pair!r}") from exc
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            raise ValueError(
+                f"bounds[{name!r}] must be (low, high) with low < high, got {(lo, hi)}"
+            )
     if b["n"][0] < 0 or b["kappa"][0] < 0 or b["sigma"][0] < 1e-3 or b["sigma"][1] > 2.5:
         raise ValueError("bounds must keep n >= 0, kappa >= 0 and sigma within [1e-3, 2.5]")
-    lo = np.array([b["n"][0], b["kappa"][0], b["sigma"][0]][:P])
-    hi = np.array([b["n"][1], b["kappa"][1], b["sigma"][1]][:P])
+    lo = np.array([b["n"][0], b["kappa"][0], b["sigma"][0]][:P], float)
+    hi = np.array([b["n"][1], b["kappa"][1], b["sigma"][1]][:P], float)
     return lo, hi
 
 
-def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
-    """Bounded LM from starts ``p`` (N, P) for N pixels at once; returns (p, cost, converged, iterations).
+def check_starts(starts):
+    """``starts`` as an array (S, 2) of (n, kappa) starting points; empty or malformed is a
+    ValueError."""
+    try:
+        arr = np.asarray(starts, float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"starts must be a sequence of (n, kappa) pairs, got {starts!r}") from exc
+    if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] != 2 or not np.all(np.isfinite(arr)):
+        raise ValueError(
+            f"starts must be a non-empty sequence of finite (n, kappa) pairs, got {starts!r}"
+        )
+    return arr
 
-    Converged pixels leave the working set, so an iteration costs in proportion to the pixels still moving.
-    A pixel converges when a successful step changes the cost by less than ``tol`` (relative) or moves every
-    parameter by less than ``1e-10`` of its bound range, or when the damping grows past 1e10 without success.
+
+def check_noise(noise, name: str = "noise"):
+    """A DOLP noise standard deviation: positive and finite (scalar or array), or None."""
+    if noise is None:
+        return None
+    try:
+        arr = np.asarray(noise, float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(
+            f"{name} must be a positive DOLP standard deviation, got {noise!r}"
+        ) from exc
+    if not np.all(np.isfinite(arr) & (arr > 0)):
+        raise ValueError(
+            f"{name} must be a positive, finite DOLP standard deviation (or None), got {noise!r}"
+        )
+    return arr
+
+
+def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
+    """Bounded LM from starts ``p`` (N, P) for N pixels at once; returns (p, cost, converged,
+    iterations).
+
+    Converged pixels leave the working set, so an iteration costs in proportion to the pixels still
+    moving.
+    A pixel converges when a successful step changes the cost by less than ``tol`` (relative) or
+    moves every
+    parameter by less than ``1e-10`` of its bound range, or when the damping grows past 1e10 without
+    success.
     """
     N, P = p.shape
     p = p.copy()
@@ -124,7 +242,8 @@ def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
         A = np.einsum("nmi,nmj->nij", J, J)
         g = np.einsum("nmi,nm->ni", J, r)
         pi = p[idx]
-        # active bounds: a parameter on its bound whose descent direction leaves the box is held there,
+        # active bounds: a parameter on its bound whose descent direction leaves the box is held
+        # there,
         # and the step is solved in the free subspace (projection alone stalls along the bound)
         held = ((pi <= lo) & (g > 0)) | ((pi >= hi) & (g < 0))
         free = ~held
@@ -142,7 +261,11 @@ def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
         better = c_new < c
         rel = np.where(better, (c - c_new) / np.maximum(c, 1e-300), 0.0)
         small_step = np.all(np.abs(p_new - pi) <= xtol, axis=-1)
-        finished = (better & ((rel < tol) | small_step)) | (~better & (lam > 1e10)) | (np.minimum(c, c_new) < 1e-30)
+        finished = (
+            (better & ((rel < tol) | small_step))
+            | (~better & (lam > 1e10))
+            | (np.minimum(c, c_new) < 1e-30)
+        )
         p[idx] = np.where(better[:, None], p_new, pi)
         r = np.where(better[:, None], r_new, r)
         J = np.where(better[:, None, None], J_new, J)
@@ -158,57 +281,149 @@ def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
     return p, cost, done, iterations
 
 
-def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bounds=None,
-             starts=DEFAULT_STARTS, sigma0: float = 0.3, max_iter: int = 200, tol: float = 1e-12,
-             **model_kw) -> DolpFit:
+def fit_dolp(
+    dolp,
+    theta_i,
+    theta_r,
+    phi=np.pi,
+    *,
+    sigma=None,
+    noise=None,
+    systematic=None,
+    covariance=None,
+    bounds=None,
+    starts=DEFAULT_STARTS,
+    sigma0: float = 0.3,
+    max_iter: int = 200,
+    tol: float = 1e-12,
+    **model_kw,
+) -> DolpFit:
     """Batched bounded least squares of (n, kappa[, sigma]) to DOLP measured at M geometries.
 
-    Every pixel runs a Levenberg-Marquardt iteration with its own damping, in one vectorised pass; the
-    Jacobian is analytic in (n, kappa) (:class:`~scatterlab.inversion.forward.DolpForward`). Each start of
+    Every pixel runs a Levenberg-Marquardt iteration with its own damping, in one vectorised pass;
+    the
+    Jacobian is analytic in (n, kappa) (:class:`~scatterlab.inversion.forward.DolpForward`). Each
+    start of
     ``starts`` is run for every pixel and the lowest cost wins per pixel.
 
     Parameters
     ----------
     dolp : array (..., M)
-        Measured DOLP; NaN entries are masked.
+        Measured DOLP in [0, 1]; NaN entries are masked. Infinite values, and values outside [0, 1]
+        by more
+        than ``max(DOLP_MARGIN, 5 * noise)`` (0.05 without ``noise``), raise a ValueError: set them
+        to NaN to
+        leave them out.
     theta_i, theta_r : array (M,) [rad]
+        M >= P, the number of fitted parameters.
     phi : float or array (M,) [rad], default pi (specular plane)
     sigma : float or array (...), optional
         Known roughness; when given only (n, kappa) are fitted.
     noise : float or array (...), optional
-        DOLP noise standard deviation for the covariance (default: estimated from the residuals).
+        DOLP noise standard deviation (> 0) for the covariance (default: estimated from the
+        residuals).
+    systematic : float or array (M,), optional
+        Known systematic DOLP error standard deviation per geometry, added in quadrature to
+        ``noise`` (which must then be a scalar) or to ``covariance``: the fit is weighted
+        (generalised least squares) and the covariance is in absolute units.
+    covariance : array (M, M), optional
+        Full DOLP error covariance (errors correlated across geometries), used instead of ``noise``:
+        residuals are whitened with its Cholesky factor. NaN entries of ``dolp`` are then refused.
     bounds : dict, optional
-        ``{"n": (lo, hi), "kappa": (lo, hi), "sigma": (lo, hi)}``; defaults in ``DEFAULT_BOUNDS``.
-    starts : sequence of (n, kappa)
+        ``{"n": (lo, hi), "kappa": (lo, hi), "sigma": (lo, hi)}``; defaults in ``DEFAULT_BOUNDS``;
+        another key is a ValueError.
+    starts : non-empty sequence of (n, kappa)
     sigma0 : float -- starting roughness.
     max_iter, tol : Levenberg-Marquardt limits (iterations per start; relative cost decrease).
 
     Returns
     -------
     DolpFit
+        ``converged`` says the iteration stopped on its criteria; ``identifiable`` (..., P) says
+        whether the data determine each parameter at the solution (non-singular Fisher information,
+        see :func:`~scatterlab.inversion.design.inverse_information`). An undetermined parameter has
+        an infinite variance (NaN covariances), and an :class:`IdentifiabilityWarning` says how many
+        pixels are affected.
     """
-    y, ti, tr, ph = _prepare(dolp, theta_i, theta_r, phi)
+    noise = check_noise(noise)
+    margin = DOLP_MARGIN if noise is None else max(DOLP_MARGIN, 5 * float(np.max(noise)))
+    y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi, margin=margin)
+    starts = check_starts(starts)
+    if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1 and tol > 0):
+        raise ValueError(
+            f"max_iter must be a positive integer and tol > 0, got {max_iter!r}, {tol!r}"
+        )
     fit_sigma = sigma is None
     P = 3 if fit_sigma else 2
-    lo, hi = _bounds(bounds, P)
-    batch = y.shape[:-1]
+    if ti.size < P:
+        raise ValueError(
+            f"dolp has {ti.size} geometries; at least {P} are needed to fit {P} parameters"
+        )
+    lo, hi = parameter_bounds(bounds, P)
+    batch, M = y.shape[:-1], y.shape[-1]
     mask = np.isfinite(y)
     valid = mask.sum(-1) >= P
-    y0 = np.where(mask, y, 0.0)
     sig_known = None if fit_sigma else np.broadcast_to(np.asarray(sigma, float), batch)
     forward = DolpForward(ti, tr, ph, sigma=None if fit_sigma else sig_known.ravel(), **model_kw)
+    y0 = np.where(mask, y, 0.0).reshape(-1, M)
+    whiten = _whitening(noise, systematic, covariance, mask)
+    if (
+        whiten is not None
+    ):  # generalised least squares: residuals in units of their standard deviation
+        forward, y0, noise = _Whitened(forward, whiten), y0 @ whiten.T, np.asarray(1.0)
+    s0 = sigma0 if fit_sigma else None
+    p, cost, done, iterations = _best_of_starts(
+        forward, y0, mask.reshape(-1, M), valid.ravel(), starts, s0, lo, hi, max_iter, tol
+    )
+    p, cost, done = p.reshape(batch + (P,)), cost.reshape(batch), done.reshape(batch)
+    cov, identifiable = _laplace_covariance(forward, p, mask, cost, noise)
+    identifiable = identifiable & valid[..., None]
+    _warn_undetermined(valid, identifiable)
+    nan = np.where(valid, 1.0, np.nan)
+    sig_out = p[..., 2] if fit_sigma else sig_known
+    return DolpFit(
+        n=p[..., 0] * nan,
+        kappa=p[..., 1] * nan,
+        sigma=np.asarray(sig_out) * nan,
+        covariance=cov * nan[..., None, None],
+        cost=cost * nan,
+        converged=done & valid,
+        valid=valid,
+        iterations=iterations,
+        identifiable=identifiable,
+    )
 
-    y0f, maskf, validf = y0.reshape(-1, y.shape[-1]), mask.reshape(-1, y.shape[-1]), valid.ravel()
+
+def _warn_undetermined(valid, identifiable):
+    """An IdentifiabilityWarning naming the undetermined parameters and their pixel count."""
+    undetermined = valid & ~np.all(identifiable, -1)
+    if not np.any(undetermined):
+        return
+    P = identifiable.shape[-1]
+    names = [
+        nm for k, nm in enumerate(PARAMETER_NAMES[:P]) if np.any(valid & ~identifiable[..., k])
+    ]
+    warnings.warn(
+        f"the data do not determine {', '.join(names)} at {int(undetermined.sum())} of "
+        f"{int(valid.sum())} fitted pixel(s) (singular Fisher information at the solution): "
+        "their variance is reported as inf; see DolpFit.identifiable",
+        IdentifiabilityWarning,
+        stacklevel=3,
+    )
+
+
+def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, max_iter, tol):
+    """Run LM from every start for the N flattened pixels; keep the lowest cost per pixel."""
+    P = lo.size
     best_p = best_cost = best_done = None
     total_iter = 0
     for n0, k0 in starts:
-        p = np.empty((validf.size, P))
+        p = np.empty((valid.size, P))
         p[:, 0], p[:, 1] = n0, k0
-        if fit_sigma:
+        if sigma0 is not None:
             p[:, 2] = sigma0
         p = np.clip(p, lo, hi)
-        p, cost, done, it = _levenberg_marquardt(forward, y0f, maskf, p, lo, hi, validf, max_iter, tol)
-        p, cost, done = p.reshape(batch + (P,)), cost.reshape(batch), done.reshape(batch)
+        p, cost, done, it = _levenberg_marquardt(forward, y0, mask, p, lo, hi, valid, max_iter, tol)
         total_iter += it
         if best_p is None:
             best_p, best_cost, best_done = p, cost, done
@@ -217,33 +432,91 @@ def fit_dolp(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, noise=None, bound
             best_p = np.where(take[..., None], p, best_p)
             best_done = np.where(take, done, best_done)
             best_cost = np.where(take, cost, best_cost)
-    _, J = forward.value_and_jacobian(best_p.reshape(-1, P))
+    return best_p, best_cost, best_done, total_iter
+
+
+def _whitening(noise, systematic, covariance, mask):
+    """Inverse Cholesky factor (M, M) of the DOLP error covariance, or None (unweighted fit)."""
+    if systematic is None and covariance is None:
+        return None
+    M = mask.shape[-1]
+    if covariance is not None:
+        if noise is not None:
+            raise ValueError(
+                "give either noise or covariance (the full DOLP error covariance), not both"
+            )
+        V = np.asarray(covariance, float)
+        if V.shape != (M, M) or not np.all(np.isfinite(V)) or not np.allclose(V, V.T, rtol=1e-10):
+            raise ValueError(f"covariance must be a finite symmetric ({M}, {M}) matrix")
+        if not np.all(mask):
+            raise ValueError("covariance with missing (NaN) dolp entries: use sample_posterior")
+    elif noise is None or np.ndim(noise):
+        raise ValueError("systematic needs a scalar noise (or a covariance) to weight the fit")
+    else:
+        V = np.eye(M) * float(noise) ** 2
+    t = np.zeros(M) if systematic is None else np.asarray(systematic, float)
+    if not (np.ndim(t) == 0 or t.shape == (M,)) or not np.all(np.isfinite(t) & (t >= 0)):
+        raise ValueError(
+            f"systematic must be a float or an array ({M},) of standard deviations >= 0"
+        )
+    try:
+        L = np.linalg.cholesky(V + np.diag(np.broadcast_to(t, (M,)) ** 2))
+    except np.linalg.LinAlgError as exc:
+        raise ValueError("covariance must be positive definite") from exc
+    return np.linalg.inv(L)
+
+
+class _Whitened:
+    """A forward model whose values and Jacobian are multiplied by a whitening matrix (M, M)."""
+
+    def __init__(self, forward, W):
+        self.forward, self.W = forward, W
+
+    def __call__(self, params, rows=None):
+        return self.forward(params, rows) @ self.W.T
+
+    def value_and_jacobian(self, params, rows=None):
+        f, J = self.forward.value_and_jacobian(params, rows)
+        return f @ self.W.T, np.einsum("ij,...jk->...ik", self.W, J)
+
+
+def _laplace_covariance(forward, p, mask, cost, noise):
+    """Laplace covariance s^2 (J^T J)^+ at the solutions ``p`` (..., P) and the identifiable
+    parameters."""
+    batch, P = p.shape[:-1], p.shape[-1]
+    _, J = forward.value_and_jacobian(p.reshape(-1, P))
     J = J.reshape(batch + J.shape[-2:])
     J = np.where(mask[..., None], J, 0.0)
     m = mask.sum(-1)
-    s2 = (np.asarray(noise, float) ** 2 if noise is not None
-          else np.where(m > P, 2 * best_cost / np.maximum(m - P, 1), np.nan))
+    s2 = noise**2 if noise is not None else np.where(m > P, 2 * cost / np.maximum(m - P, 1), np.nan)
     A = np.einsum("...mi,...mj->...ij", J, J)
-    with np.errstate(all="ignore"):
-        cov = np.linalg.pinv(A) * np.asarray(s2)[..., None, None]
-    nan = np.where(valid, 1.0, np.nan)
-    sig_out = best_p[..., 2] if fit_sigma else sig_known
-    return DolpFit(n=best_p[..., 0] * nan, kappa=best_p[..., 1] * nan, sigma=np.asarray(sig_out) * nan,
-                   covariance=cov * nan[..., None, None], cost=best_cost * nan, converged=best_done & valid,
-                   valid=valid, iterations=total_iter)
+    cov, identifiable = inverse_information(A)
+    return cov * np.asarray(s2)[..., None, None], identifiable
 
 
-def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=None,
-                       starts=DEFAULT_STARTS, sigma0: float = 0.3, **model_kw) -> DolpFit:
+def fit_dolp_per_pixel(
+    dolp,
+    theta_i,
+    theta_r,
+    phi=np.pi,
+    *,
+    sigma=None,
+    bounds=None,
+    starts=DEFAULT_STARTS,
+    sigma0: float = 0.3,
+    **model_kw,
+) -> DolpFit:
     """Baseline: one ``scipy.optimize.least_squares`` (trust-region reflective) per pixel and start.
 
-    Same forward model, analytic Jacobian, starts and bounds as :func:`fit_dolp`, so that comparing the two
+    Same forward model, analytic Jacobian, starts and bounds as :func:`fit_dolp`, so that comparing
+    the two
     measures batching alone. No covariance (NaN).
     """
-    y, ti, tr, ph = _prepare(dolp, theta_i, theta_r, phi)
+    y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi)
+    starts = check_starts(starts)
     fit_sigma = sigma is None
     P = 3 if fit_sigma else 2
-    lo, hi = _bounds(bounds, P)
+    lo, hi = parameter_bounds(bounds, P)
     batch = y.shape[:-1]
     flat = y.reshape(-1, y.shape[-1])
     sig_flat = None if fit_sigma else np.broadcast_to(np.asarray(sigma, float), batch).ravel()
@@ -253,7 +526,9 @@ def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=
         ok = np.isfinite(row)
         if ok.sum() < P:
             continue
-        fwd = DolpForward(ti[ok], tr[ok], ph[ok], sigma=None if fit_sigma else sig_flat[i], **model_kw)
+        fwd = DolpForward(
+            ti[ok], tr[ok], ph[ok], sigma=None if fit_sigma else sig_flat[i], **model_kw
+        )
         target = row[ok]
 
         def res(p, fwd=fwd, target=target):
@@ -265,7 +540,9 @@ def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=
         best = None
         for n0, k0 in starts:
             x0 = np.clip([n0, k0] + ([sigma0] if fit_sigma else []), lo + 1e-9, hi - 1e-9)
-            res_ = optimize.least_squares(res, x0, jac=jac, bounds=(lo, hi), xtol=1e-14, ftol=1e-14, gtol=1e-14)
+            res_ = optimize.least_squares(
+                res, x0, jac=jac, bounds=(lo, hi), xtol=1e-14, ftol=1e-14, gtol=1e-14
+            )
             if best is None or res_.cost < best.cost:
                 best = res_
         out[i, :P] = best.x
@@ -273,6 +550,13 @@ def fit_dolp_per_pixel(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=
             out[i, 2] = sig_flat[i]
         cost[i] = best.cost
     valid = np.isfinite(cost).reshape(batch)
-    return DolpFit(n=out[:, 0].reshape(batch), kappa=out[:, 1].reshape(batch), sigma=out[:, 2].reshape(batch),
-                   covariance=np.full(batch + (P, P), np.nan), cost=cost.reshape(batch), converged=valid,
-                   valid=valid, iterations=0)
+    return DolpFit(
+        n=out[:, 0].reshape(batch),
+        kappa=out[:, 1].reshape(batch),
+        sigma=out[:, 2].reshape(batch),
+        covariance=np.full(batch + (P, P), np.nan),
+        cost=cost.reshape(batch),
+        converged=valid,
+        valid=valid,
+        iterations=0,
+    )

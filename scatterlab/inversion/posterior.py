@@ -1,75 +1,161 @@
 r"""Posterior sampling of (n, kappa, sigma) from multi-geometry DOLP with emcee.
 
 Model and likelihood
-    :math:`\mathcal P_j = \mathcal P^{thy}(n - j\kappa, \sigma; \theta_{i,j}, \theta_{r,j}, \phi_j) + e_j` with
-    independent Gaussian errors :math:`e_j \sim N(0, s^2)` (the pBRDF DOLP of Eq. 203). The noise level
-    :math:`s` is either known (``noise=0.01``) or a parameter (``noise=None``) with a log-uniform prior on
-    ``noise_bounds``. NaN measurements are left out.
+    :math:`\mathcal P_j = \mathcal P^{thy}(n - j\kappa, \sigma; \theta_{i,j}, \theta_{r,j}, \phi_j)
+    + e_j` (the
+    pBRDF DOLP of Eq. 203) with Gaussian errors :math:`e \sim N(0, V)`:
+
+    * default: independent, :math:`V = s^2 I`; the noise level :math:`s` is known (``noise=0.01``)
+    or a
+      parameter (``noise=None``) with a log-uniform prior on ``noise_bounds``;
+    * ``systematic`` (float or (M,)): a known systematic standard deviation :math:`t_j` per geometry
+    (model
+      error, a measured deconvolution or registration error) added in quadrature,
+      :math:`V = \mathrm{diag}(s^2 + t_j^2)`, whether :math:`s` is known or inferred;
+    * ``covariance`` ((M, M)): a full error covariance :math:`C` (errors correlated across
+    geometries) used
+      instead of ``noise`` (which must then be None and is not inferred), :math:`V = C +
+      \mathrm{diag}(t^2)`,
+      factorised (Cholesky) once.
+
+    NaN measurements are left out (their rows and columns of :math:`V` too).
 
 Priors
-    Uniform on the bounds (defaults of :data:`~scatterlab.inversion.DEFAULT_BOUNDS`: n in [0, 5], kappa in
+    Uniform on the bounds (defaults of :data:`~scatterlab.inversion.DEFAULT_BOUNDS`: n in [0, 5],
+    kappa in
     [0, 25], sigma in [0.01, 1.5]); with ``kappa_prior="log-uniform"`` the sampler works in
-    :math:`\log\kappa`, uniform on ``[log(max(kappa_lo, 1e-3)), log(kappa_hi)]`` -- the choice for a material
-    whose absorption is unknown to within orders of magnitude. Chains are always reported in (n, kappa,
-    sigma).
+    :math:`\log\kappa`, uniform on ``[log(max(kappa_lo, 1e-3)), log(kappa_hi)]`` -- the choice for a
+    material
+    whose absorption is unknown to within orders of magnitude. Chains are always reported in (n,
+    kappa,
+    sigma). The prior options are grouped in :class:`PriorOptions`.
 
-Sampling
-    The affine-invariant ensemble sampler (``emcee``), vectorised over walkers. Walkers start in a small
-    ball (half the Laplace standard errors) around the least-squares solution (:func:`~scatterlab.inversion.fit_dolp`), shared among all local
-    minima whose chi-square is within ``mode_delta_chi2`` of the best (so a degenerate metal/dielectric pair
-    is explored from both sides). With ``n_steps=None`` the chain is extended in blocks until it is at least
-    ``min_tau_multiple`` (50) integrated autocorrelation times long and tau has changed by less than 5 %,
-    up to ``max_steps``; otherwise a :class:`ConvergenceWarning` says so. Burn-in is 2 tau, thinning tau/2.
+Sampling (:class:`SamplerOptions`)
+    ``n_ensembles`` (default 2) independent runs of the affine-invariant ensemble sampler
+    (``emcee``), each
+    with ``n_walkers`` walkers, its own seed and its own start, vectorised over walkers. Walkers
+    start in a
+    small ball (half the Laplace standard errors) around the least-squares solution
+    (:func:`~scatterlab.inversion.fit_dolp`), shared among all local minima whose chi-square is
+    within
+    ``mode_delta_chi2`` of the best (so a degenerate metal/dielectric pair is explored from both
+    sides). With
+    ``n_steps=None`` the ensembles are extended in blocks until each is at least
+    ``min_tau_multiple`` (50)
+    integrated autocorrelation times long, tau has changed by less than 5 % and the ensembles agree
+    (R-hat
+    below 1.01), up to ``max_steps``; otherwise a :class:`ConvergenceWarning` says so. Burn-in is 2
+    tau,
+    thinning tau/2. ``moves`` takes an emcee move (or a list of ``(move, weight)``) or a shortcut
+    string.
 
 Diagnostics
-    tau per parameter, the mean acceptance fraction, the split-chain potential scale reduction R-hat (each
-    walker's kept chain cut in halves), the effective sample size, and modes: the walkers' medians are
-    clustered (two-means on standardised coordinates); two clusters further apart than ``6`` pooled
-    within-walker standard deviations, each holding at least two walkers, make the posterior *multimodal*,
-    and both modes are reported with their weights.
+    The walkers of one ensemble are not independent chains (each move uses the others), so a split
+    R-hat over
+    walkers says little. Here R-hat (:func:`ensemble_rhat`) compares the independent ensembles, each
+    pooled
+    over its walkers and split in halves; the effective sample size per parameter
+    (:func:`effective_sample_size`) is walkers x steps / tau with emcee's integrated autocorrelation
+    time
+    tau. Also the mean acceptance fraction and modes: the walkers' medians are clustered (two-means
+    on
+    standardised coordinates); two clusters further apart than ``6`` pooled within-walker standard
+    deviations, each holding at least two walkers, make the posterior *multimodal*, and both modes
+    are
+    reported with their weights. :meth:`Posterior.to_inference_data` exports the chains to ArviZ.
 
 Checkpointing
-    ``backend="run.h5"`` stores the chain in emcee's HDF5 backend (group ``name``); calling again with the
-    same file resumes where the chain stopped (the walkers' state and all samples are in the file).
+    ``backend="run.h5"`` stores each ensemble in emcee's HDF5 backend (group
+    ``<name>/ensemble_<k>``);
+    calling again with the same file resumes where the chains stopped. Each group records a digest
+    of the data,
+    geometries, error model, priors and sampler settings, and resuming with any of them changed is a
+    ValueError (the chains would mix two posteriors). emcee backend objects can be passed instead of
+    a path.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
+import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
 from scatterlab.inversion.forward import DolpForward
-from scatterlab.inversion.least_squares import DEFAULT_BOUNDS, DEFAULT_STARTS, DolpFit, _bounds, _prepare, fit_dolp
+from scatterlab.inversion.least_squares import (
+    DEFAULT_BOUNDS,
+    DEFAULT_STARTS,
+    DOLP_MARGIN,
+    DolpFit,
+    IdentifiabilityWarning,
+    check_noise,
+    check_starts,
+    fit_dolp,
+    parameter_bounds,
+    prepare_data,
+)
 
-__all__ = ["sample_posterior", "sample_posteriors", "Posterior", "ConvergenceWarning", "PARAMETERS",
-           "split_rhat", "local_minima"]
+__all__ = [
+    "sample_posterior",
+    "sample_posteriors",
+    "Posterior",
+    "ConvergenceWarning",
+    "PARAMETERS",
+    "PriorOptions",
+    "SamplerOptions",
+    "PosteriorProblem",
+    "posterior_problem",
+    "start_walkers",
+    "run_ensembles",
+    "diagnose",
+    "split_rhat",
+    "ensemble_rhat",
+    "effective_sample_size",
+    "local_minima",
+    "MOVES",
+]
 
 PARAMETERS = ("n", "kappa", "sigma")
 KAPPA_FLOOR = 1e-3  # lower end of the log-uniform kappa prior
+RHAT_MAX = 1.01  # between-ensemble R-hat above which the ensembles disagree (Vehtari et al. 2021)
+ACCEPTANCE = (0.15, 0.7)  # acceptance fractions outside this range mean a poorly tuned proposal
+MODEL_KEYS = (
+    "shadowing",
+    "diffuse",
+    "distribution",
+)  # keywords passed on to scatterlab.pbrdf.Model
 
 
 class ConvergenceWarning(UserWarning):
-    """The MCMC chain is too short for its autocorrelation time, or the acceptance fraction is off."""
+    """The MCMC chain is too short for its autocorrelation time, the ensembles disagree, or the
+    acceptance
+    fraction is off."""
 
 
+# -- diagnostics
+# ---------------------------------------------------------------------------------------------
 def split_rhat(chain: np.ndarray) -> np.ndarray:
-    """Split-chain potential scale reduction (Gelman et al., BDA3 Sec. 11.4).
+    """Split-chain potential scale reduction (Gelman et al., BDA3 Sec. 11.4) over independent
+    chains.
 
     Parameters
     ----------
     chain : array (steps, chains, P)
+        The chains must be independent (not the walkers of one emcee ensemble: use
+        :func:`ensemble_rhat`).
 
     Returns
     -------
-    ndarray (P,); values near 1 (below about 1.01-1.05) mean the chains agree.
+    ndarray (P,); values near 1 (below about 1.01) mean the chains agree.
     """
     steps = chain.shape[0] // 2
     if steps < 2:
         return np.full(chain.shape[-1], np.nan)
-    halves = np.concatenate([chain[:steps], chain[steps:2 * steps]], axis=1)  # (steps, 2C, P)
+    halves = np.concatenate([chain[:steps], chain[steps : 2 * steps]], axis=1)  # (steps, 2C, P)
     means = halves.mean(0)
     W = halves.var(0, ddof=1).mean(0)
     B = steps * means.var(0, ddof=1)
@@ -78,15 +164,493 @@ def split_rhat(chain: np.ndarray) -> np.ndarray:
         return np.sqrt(np.where(W > 0, var / W, np.nan))
 
 
-def local_minima(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=None, starts=DEFAULT_STARTS,
-                 noise=None, delta_chi2: float = 4.0, **model_kw) -> list[DolpFit]:
-    """Distinct least-squares minima of one measurement vector whose chi-square is within ``delta_chi2`` of the best.
+def ensemble_rhat(chain: np.ndarray, n_ensembles: int) -> np.ndarray:
+    """R-hat between independent ensembles, each pooled over its walkers and split in halves.
 
-    One fit per start; minima closer than 1e-4 (relative, in every parameter) are merged. With ``noise``
+    Parameters
+    ----------
+    chain : array (steps, n_ensembles * walkers, P)
+        The walkers of ensemble k are the k-th contiguous block of the walker axis.
+    n_ensembles : int
+
+    Returns
+    -------
+    ndarray (P,)
+        :math:`\\sqrt{((N-1)/N\\,W + B/N)/W}` with the 2E half-ensembles as chains of N pooled
+        samples:
+        :math:`W` the mean within-chain variance, :math:`B/N` the variance of the chain means. Near
+        1 when the
+        ensembles sample the same distribution (:math:`B/N \\approx W/\\mathrm{ESS}`); NaN for fewer
+        than 4
+        steps. With one ensemble only its two halves are compared (stationarity, not agreement).
+    """
+    S, WT, P = chain.shape
+    half = S // 2
+    if half < 2 or WT % n_ensembles:
+        return np.full(P, np.nan)
+    x = chain[: 2 * half].reshape(2, half, n_ensembles, WT // n_ensembles, P)
+    pieces = np.moveaxis(x, 2, 1).reshape(2 * n_ensembles, -1, P)  # (2E, half * walkers, P)
+    N = pieces.shape[1]
+    W = pieces.var(1, ddof=1).mean(0)
+    b_over_n = pieces.mean(1).var(0, ddof=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.sqrt(np.where(W > 0, ((N - 1) / N * W + b_over_n) / W, np.nan))
+
+
+def effective_sample_size(chain: np.ndarray) -> np.ndarray:
+    """Effective number of independent samples per parameter, walkers x steps / tau.
+
+    Parameters
+    ----------
+    chain : array (steps, walkers, P)
+        Unthinned samples after burn-in; tau is emcee's integrated autocorrelation time
+        (walker-averaged
+        autocorrelation, automatic window; Goodman & Weare 2010, Sokal 1997).
+
+    Returns
+    -------
+    ndarray (P,); NaN for a parameter that does not move.
+    """
+    import emcee
+
+    S, W, P = chain.shape
+    if S < 2:
+        return np.full(P, np.nan)
+    with warnings.catch_warnings(), np.errstate(invalid="ignore", divide="ignore"):
+        warnings.simplefilter("ignore")
+        tau = emcee.autocorr.integrated_time(chain, tol=0)
+    moving = np.ptp(chain.reshape(-1, P), axis=0) > 0
+    return np.where(moving & (tau > 0), S * W / np.maximum(tau, 1e-300), np.nan)
+
+
+# -- options
+# -------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class PriorOptions:
+    """Prior ranges of :func:`sample_posterior`.
+
+    Attributes
+    ----------
+    bounds : dict or None
+        ``{"n": (lo, hi), "kappa": (lo, hi), "sigma": (lo, hi)}`` uniform prior ranges (defaults in
+        :data:`~scatterlab.inversion.DEFAULT_BOUNDS`).
+    kappa_prior : "uniform" or "log-uniform"
+    noise_bounds : (low, high)
+        Log-uniform prior range of the DOLP noise when it is a parameter.
+    """
+
+    bounds: dict | None = None
+    kappa_prior: str = "uniform"
+    noise_bounds: tuple = (1e-5, 1.0)
+
+    def validate(self) -> None:
+        if self.kappa_prior not in ("uniform", "log-uniform"):
+            raise ValueError(
+                f"kappa_prior must be 'uniform' or 'log-uniform', got {self.kappa_prior!r}"
+            )
+        nb = self.noise_bounds
+        if not (len(nb) == 2 and np.all(np.isfinite(nb)) and 0 < nb[0] < nb[1]):
+            raise ValueError(f"noise_bounds must satisfy 0 < low < high, got {nb!r}")
+
+
+MOVES = ("kde", "de", "stretch")
+
+
+@dataclass(frozen=True)
+class SamplerOptions:
+    """Sampler settings of :func:`sample_posterior` (see the module docstring).
+
+    Attributes
+    ----------
+    n_walkers : int -- walkers per ensemble (>= 2 x the sampled dimensions).
+    n_ensembles : int -- independent ensembles (>= 1; 2 or more for a between-ensemble R-hat).
+    n_steps : int or None -- fixed chain length (>= 20), or None: run until converged.
+    max_steps, block : int -- the adaptive run's limit and block length [steps].
+    min_tau_multiple : float -- required run length in autocorrelation times.
+    moves : str, emcee move or list of (move, weight)
+        "kde" (default) mixes the Gaussian-KDE move (80 %) with differential evolution (20 %); on
+        the curved
+        (n, kappa, sigma) posteriors it cuts tau about 10x against the stretch move (measured in
+        ``studies/performance/perf_mcmc.py``) for 1.5x the cost per step; "de" (DE 80 % + snooker 20
+        %);
+        "stretch".
+    starts : sequence of (n, kappa) -- least-squares starts that locate the modes.
+    mode_delta_chi2 : float -- minima within this chi-square of the best seed walkers.
+    progress : bool -- emcee's progress bar.
+    """
+
+    n_walkers: int = 32
+    n_ensembles: int = 2
+    n_steps: int | None = None
+    max_steps: int = 20000
+    block: int = 500
+    min_tau_multiple: float = 50.0
+    moves: object = "kde"
+    starts: tuple = DEFAULT_STARTS
+    mode_delta_chi2: float = 4.0
+    progress: bool = False
+
+    def validate(self, ndim: int) -> None:
+        def integer(v):
+            return isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+
+        if not (integer(self.n_walkers) and self.n_walkers >= 2 * ndim):
+            raise ValueError(
+                f"n_walkers must be an integer of at least {2 * ndim} (twice the number of sampled "
+                f"parameters), got {self.n_walkers!r}"
+            )
+        if not (integer(self.n_ensembles) and self.n_ensembles >= 1):
+            raise ValueError(f"n_ensembles must be a positive integer, got {self.n_ensembles!r}")
+        if self.n_steps is not None and not (integer(self.n_steps) and self.n_steps >= 20):
+            raise ValueError(
+                "n_steps must be None (run until converged) or an integer >= 20, got "
+                f"{self.n_steps!r}"
+            )
+        if not (
+            integer(self.max_steps)
+            and self.max_steps >= 20
+            and integer(self.block)
+            and self.block >= 1
+        ):
+            raise ValueError(
+                f"max_steps must be an integer >= 20 and block >= 1, got {self.max_steps!r}, "
+                f"{self.block!r}"
+            )
+        if not self.min_tau_multiple > 0:
+            raise ValueError(f"min_tau_multiple must be > 0, got {self.min_tau_multiple!r}")
+        if isinstance(self.moves, str) and self.moves not in MOVES:
+            raise ValueError(
+                f"moves must be one of {list(MOVES)} or emcee move objects, got {self.moves!r}"
+            )
+        if not self.mode_delta_chi2 >= 0:
+            raise ValueError(f"mode_delta_chi2 must be >= 0, got {self.mode_delta_chi2!r}")
+        check_starts(self.starts)
+
+
+def _emcee_moves(moves):
+    """emcee moves for a shortcut string, or the given move objects unchanged."""
+    import emcee
+
+    if not isinstance(moves, str):
+        return moves
+    return {
+        "kde": [(emcee.moves.KDEMove(), 0.8), (emcee.moves.DEMove(), 0.2)],
+        "de": [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)],
+        "stretch": [(emcee.moves.StretchMove(), 1.0)],
+    }[moves]
+
+
+def _moves_key(moves) -> str:
+    """A stable description of the moves for the checkpoint digest."""
+    if isinstance(moves, str):
+        return moves
+    items = moves if isinstance(moves, (list, tuple)) else [moves]
+    return repr(
+        [
+            (type(m[0]).__name__, float(m[1])) if isinstance(m, tuple) else type(m).__name__
+            for m in items
+        ]
+    )
+
+
+def _resolve_options(prior, sampler, kw):
+    """Split legacy keywords into PriorOptions, SamplerOptions and pBRDF model keywords."""
+    out = []
+    for cls, given, label in ((PriorOptions, prior, "prior"), (SamplerOptions, sampler, "sampler")):
+        names = {f.name for f in fields(cls)}
+        picked = {k: kw.pop(k) for k in list(kw) if k in names}
+        if given is not None and picked:
+            raise ValueError(
+                f"give {sorted(picked)} either inside {label}={cls.__name__}(...) or as keywords, "
+                "not both"
+            )
+        if given is not None and not isinstance(given, cls):
+            raise ValueError(f"{label} must be a {cls.__name__}, got {type(given).__name__}")
+        out.append(given if given is not None else cls(**picked))
+    unknown = sorted(set(kw) - set(MODEL_KEYS))
+    if unknown:
+        allowed = sorted(
+            {f.name for f in fields(PriorOptions)}
+            | {f.name for f in fields(SamplerOptions)}
+            | set(MODEL_KEYS)
+        )
+        raise ValueError(f"unknown keyword(s) {unknown}; allowed: {allowed}")
+    return out[0], out[1], dict(kw)
+
+
+# -- the problem: data, error model, prior, log posterior
+# ------------------------------------------------------
+class DolpLogPosterior:
+    """Vectorised log posterior over walkers in sampler coordinates (picklable).
+
+    Sampler coordinates are (n, kappa or log kappa[, sigma][, log noise]); the prior is uniform on
+    ``[lo, hi]`` in them. The likelihood is Gaussian with the error model of the module docstring;
+    constant
+    terms are dropped.
+    """
+
+    def __init__(
+        self, forward, y, lo, hi, *, fit_sigma, log_kappa, noise, systematic=None, covariance=None
+    ):
+        from scipy.linalg import cholesky
+
+        self.forward, self.lo, self.hi = forward, lo, hi
+        self.fit_sigma, self.log_kappa, self.noise = fit_sigma, log_kappa, noise
+        mask = np.isfinite(y)
+        self.index, self.y, self.m = np.flatnonzero(mask), y[mask], int(mask.sum())
+        self.syst2 = np.zeros(self.m) if systematic is None else systematic[mask] ** 2
+        self.chol = None
+        if covariance is not None:
+            self.chol = cholesky(covariance[np.ix_(mask, mask)] + np.diag(self.syst2), lower=True)
+        self.var = None if noise is None else noise**2 + self.syst2
+
+    def physical(self, x):
+        """Sampler coordinates (W, D) -> (n, kappa, sigma) (W, P) and noise (W,) or None."""
+        p = x[:, : 3 if self.fit_sigma else 2].copy()
+        if self.log_kappa:
+            p[:, 1] = np.exp(p[:, 1])
+        s = np.exp(x[:, -1]) if self.infers_noise else None
+        return p, s
+
+    @property
+    def infers_noise(self) -> bool:
+        return self.noise is None and self.chol is None
+
+    def log_likelihood(self, f, s):
+        """Log likelihood (W,) of model DOLP ``f`` (W, M) and noise ``s`` (W,) or None."""
+        from scipy.linalg import solve_triangular
+
+        r = f[:, self.index] - self.y
+        if self.chol is not None:
+            z = solve_triangular(self.chol, r.T, lower=True)
+            return -0.5 * np.sum(z * z, 0)
+        if s is None:
+            return -0.5 * np.sum(r * r / self.var, -1)
+        v = (
+            s[:, None] ** 2 + self.syst2
+        )  # log-uniform prior on s is uniform in log s: no Jacobian term
+        return -0.5 * np.sum(r * r / v + np.log(v), -1)
+
+    def __call__(self, x):
+        x = np.atleast_2d(x)
+        out = np.full(x.shape[0], -np.inf)
+        inside = np.all((x >= self.lo) & (x <= self.hi), axis=1)
+        if not np.any(inside):
+            return out
+        p, s = self.physical(x[inside])
+        out[inside] = self.log_likelihood(self.forward(p), s)
+        return out
+
+
+@dataclass
+class PosteriorProblem:
+    """A validated posterior problem: data, geometries, error model, prior and its log posterior."""
+
+    dolp: np.ndarray
+    theta_i: np.ndarray
+    theta_r: np.ndarray
+    phi: np.ndarray
+    noise: float | None
+    sigma: float | None
+    systematic: np.ndarray | None
+    covariance: np.ndarray | None
+    prior: PriorOptions
+    model_kw: dict
+    log_post: DolpLogPosterior
+    lo: np.ndarray  # physical bounds (P,)
+    hi: np.ndarray
+
+    @property
+    def P(self) -> int:
+        return self.lo.size
+
+    @property
+    def ndim(self) -> int:
+        return self.log_post.lo.size
+
+    def error_sd(self) -> float | None:
+        """A typical known DOLP error standard deviation (None when the noise is inferred)."""
+        if self.covariance is not None:
+            return float(np.sqrt(np.mean(np.diag(self.covariance)) + np.mean(self.log_post.syst2)))
+        if self.noise is None:
+            return None
+        return float(np.sqrt(self.noise**2 + np.mean(self.log_post.syst2)))
+
+    def digest(self, sampler: SamplerOptions, ensemble: int) -> str:
+        """SHA-256 of everything a resumed chain must share with the stored one."""
+        h = hashlib.sha256()
+        for a in (
+            self.dolp,
+            self.theta_i,
+            self.theta_r,
+            self.phi,
+            self.systematic,
+            self.covariance,
+        ):
+            h.update(b"-" if a is None else np.ascontiguousarray(a, float).tobytes())
+        meta = {
+            "noise": self.noise,
+            "sigma": self.sigma,
+            "prior": asdict(self.prior),
+            "model": {k: repr(v) for k, v in sorted(self.model_kw.items())},
+            "walkers": sampler.n_walkers,
+            "ndim": self.ndim,
+            "moves": _moves_key(sampler.moves),
+            "ensemble": ensemble,
+        }
+        h.update(json.dumps(meta, sort_keys=True, default=repr).encode())
+        return h.hexdigest()
+
+
+def _check_error_model(noise, systematic, covariance, M):
+    noise = check_noise(noise)
+    if noise is not None and noise.ndim:
+        raise ValueError(
+            f"noise must be a scalar DOLP standard deviation or None, got shape {noise.shape}"
+        )
+    noise = None if noise is None else float(noise)
+    if systematic is not None:
+        systematic = (
+            np.broadcast_to(np.asarray(systematic, float), (M,)).copy()
+            if np.ndim(systematic) == 0 or np.shape(systematic) == (M,)
+            else None
+        )
+        if systematic is None or not np.all(np.isfinite(systematic) & (systematic >= 0)):
+            raise ValueError(
+                f"systematic must be a float or an array ({M},) of standard deviations >= 0"
+            )
+    if covariance is not None:
+        if noise is not None:
+            raise ValueError(
+                "give either noise or covariance (the full DOLP error covariance), not both"
+            )
+        covariance = np.asarray(covariance, float)
+        if covariance.shape != (M, M) or not np.all(np.isfinite(covariance)):
+            raise ValueError(
+                f"covariance must be a finite ({M}, {M}) matrix, got shape {covariance.shape}"
+            )
+        if not np.allclose(covariance, covariance.T, rtol=1e-10, atol=0):
+            raise ValueError("covariance must be symmetric")
+        covariance = (covariance + covariance.T) / 2
+        if np.linalg.eigvalsh(covariance)[0] <= 0:
+            raise ValueError("covariance must be positive definite")
+    return noise, systematic, covariance
+
+
+def posterior_problem(
+    dolp,
+    theta_i,
+    theta_r,
+    noise=None,
+    *,
+    phi=np.pi,
+    sigma=None,
+    systematic=None,
+    covariance=None,
+    prior: PriorOptions | None = None,
+    model_kw=None,
+) -> PosteriorProblem:
+    """Validate the inputs of :func:`sample_posterior` and build its log posterior (the *start*
+    piece)."""
+    prior = prior if prior is not None else PriorOptions()
+    prior.validate()
+    model_kw = dict(model_kw or {})
+    M = np.size(theta_i)
+    noise, systematic, covariance = _check_error_model(noise, systematic, covariance, M)
+    known = (
+        [noise or 0.0]
+        + ([] if systematic is None else [float(systematic.max())])
+        + ([] if covariance is None else [float(np.sqrt(np.max(np.diag(covariance))))])
+    )
+    margin = max(DOLP_MARGIN, 5 * float(np.sqrt(np.sum(np.square(known)))))
+    y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi, margin=margin)
+    if y.ndim != 1:
+        raise ValueError(
+            f"dolp must be one measurement vector (M,); got shape {y.shape}: use sample_posteriors"
+        )
+    fit_sigma = sigma is None
+    if not fit_sigma and not (np.ndim(sigma) == 0 and 1e-3 <= float(sigma) <= 2.5):
+        raise ValueError(f"sigma must be a known rms slope in [1e-3, 2.5] or None, got {sigma!r}")
+    P = 3 if fit_sigma else 2
+    infer = noise is None and covariance is None
+    if np.isfinite(y).sum() < P + infer:
+        raise ValueError(
+            f"dolp has {int(np.isfinite(y).sum())} finite values; at least {P + infer} are needed "
+            "for the unknowns"
+        )
+    lo, hi = parameter_bounds(prior.bounds, P)
+    s_lo, s_hi = lo.copy(), hi.copy()
+    log_kappa = prior.kappa_prior == "log-uniform"
+    if log_kappa:
+        s_lo[1], s_hi[1] = np.log(max(lo[1], KAPPA_FLOOR)), np.log(hi[1])
+    if infer:
+        s_lo, s_hi = (
+            np.r_[s_lo, np.log(prior.noise_bounds[0])],
+            np.r_[s_hi, np.log(prior.noise_bounds[1])],
+        )
+    forward = DolpForward(ti, tr, ph, sigma=None if fit_sigma else float(sigma), **model_kw)
+    log_post = DolpLogPosterior(
+        forward,
+        y,
+        s_lo,
+        s_hi,
+        fit_sigma=fit_sigma,
+        log_kappa=log_kappa,
+        noise=noise,
+        systematic=systematic,
+        covariance=covariance,
+    )
+    return PosteriorProblem(
+        y,
+        ti,
+        tr,
+        ph,
+        noise,
+        None if fit_sigma else float(sigma),
+        systematic,
+        covariance,
+        prior,
+        model_kw,
+        log_post,
+        lo,
+        hi,
+    )
+
+
+def local_minima(
+    dolp,
+    theta_i,
+    theta_r,
+    phi=np.pi,
+    *,
+    sigma=None,
+    bounds=None,
+    starts=DEFAULT_STARTS,
+    noise=None,
+    delta_chi2: float = 4.0,
+    **model_kw,
+) -> list[DolpFit]:
+    """Distinct least-squares minima of one measurement vector whose chi-square is within
+    ``delta_chi2`` of the best.
+
+    One fit per start; minima closer than 1e-4 (relative, in every parameter) are merged. With
+    ``noise``
     unknown, chi-square uses the best fit's residual variance. Best first.
     """
-    fits = [fit_dolp(dolp, theta_i, theta_r, phi, sigma=sigma, bounds=bounds, starts=(s,), noise=noise,
-                     **model_kw) for s in starts]
+    fits = [
+        fit_dolp(
+            dolp,
+            theta_i,
+            theta_r,
+            phi,
+            sigma=sigma,
+            bounds=bounds,
+            starts=(s,),
+            noise=noise,
+            **model_kw,
+        )
+        for s in check_starts(starts)
+    ]
     fits = [f for f in fits if np.isfinite(f.cost)]
     if not fits:
         return []
@@ -100,35 +664,390 @@ def local_minima(dolp, theta_i, theta_r, phi=np.pi, *, sigma=None, bounds=None, 
         if 2 * (float(f.cost) - best) / s2 > delta_chi2:
             continue
         x = np.array([f.n, f.kappa, f.sigma], float)
-        if any(np.all(np.abs(x - np.array([g.n, g.kappa, g.sigma], float)) <= 1e-4 * (1 + np.abs(x)))
-               for g in out):
+        if any(
+            np.all(np.abs(x - np.array([g.n, g.kappa, g.sigma], float)) <= 1e-4 * (1 + np.abs(x)))
+            for g in out
+        ):
             continue
         out.append(f)
     return out
 
 
+def _problem_minima(
+    problem: PosteriorProblem, options: SamplerOptions, messages: list
+) -> list[DolpFit]:
+    """The least-squares minima that seed the walkers; identifiability warnings become messages."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", IdentifiabilityWarning)
+        minima = local_minima(
+            problem.dolp,
+            problem.theta_i,
+            problem.theta_r,
+            problem.phi,
+            sigma=problem.sigma,
+            bounds=problem.prior.bounds,
+            starts=options.starts,
+            noise=problem.error_sd(),
+            delta_chi2=options.mode_delta_chi2,
+            **problem.model_kw,
+        )
+    messages.extend(
+        f"least squares: {w.message}"
+        for w in caught
+        if issubclass(w.category, IdentifiabilityWarning)
+    )
+    if len(minima) > 1:
+        messages.append(
+            f"{len(minima)} least-squares minima within delta chi2 = {options.mode_delta_chi2}: "
+            + "; ".join(
+                f"n={float(f.n):.4g}, kappa={float(f.kappa):.4g}, sigma={float(f.sigma):.4g}"
+                for f in minima
+            )
+        )
+    return minima
+
+
+def start_walkers(
+    problem: PosteriorProblem, minima: list[DolpFit], n_walkers: int, rng
+) -> np.ndarray:
+    """Starting positions (n_walkers, D) in sampler coordinates: balls around the least-squares
+    minima."""
+    rng = np.random.default_rng(rng)
+    lo, hi, P, D = problem.lo, problem.hi, problem.P, problem.ndim
+    lp = problem.log_post
+    x = np.empty((n_walkers, D))
+    which = np.arange(n_walkers) % max(len(minima), 1)
+    m = int(np.isfinite(problem.dolp).sum())
+    for w in range(n_walkers):
+        if minima:
+            f = minima[which[w]]
+            centre = np.array([float(f.n), float(f.kappa), float(f.sigma)])[:P]
+            err = np.nan_to_num(np.asarray(f.errors, float), nan=0.0)
+        else:
+            centre, err = (lo + hi) / 2, (hi - lo) / 4
+        width = np.clip(err, 1e-6 * (hi - lo), 0.05 * (hi - lo))
+        x[w, :P] = centre + 0.5 * width * rng.standard_normal(P)
+        if lp.infers_noise:
+            resid = np.sqrt(2 * float(minima[0].cost) / max(m - P, 1)) if minima else 0.01
+            resid = np.sqrt(max(resid**2 - float(np.mean(lp.syst2)), resid**2 / 100))
+            nb = problem.prior.noise_bounds
+            x[w, -1] = (
+                np.log(np.clip(resid, nb[0] * 1.01, nb[1] / 1.01)) + 0.1 * rng.standard_normal()
+            )
+    if lp.log_kappa:
+        x[:, 1] = np.log(np.maximum(x[:, 1], KAPPA_FLOOR * 1.01))
+    eps = 1e-9 * (lp.hi - lp.lo)
+    return np.clip(x, lp.lo + eps, lp.hi - eps)
+
+
+# -- checkpoints
+# -----------------------------------------------------------------------------------------------
+def _open_backends(backend, name, problem: PosteriorProblem, options: SamplerOptions):
+    """One emcee backend per ensemble (or None), reset or checked against the stored digest.
+
+    Returns (backends, resumed) with ``resumed[k]`` True when ensemble k continues a stored chain.
+    """
+    import emcee
+
+    E, shape = options.n_ensembles, (options.n_walkers, problem.ndim)
+    if backend is None:
+        return [None] * E, [False] * E
+    if isinstance(backend, (str, Path)):
+        Path(backend).parent.mkdir(parents=True, exist_ok=True)
+        bes = [
+            emcee.backends.HDFBackend(str(backend), name=f"{name}/ensemble_{k}") for k in range(E)
+        ]
+    else:
+        bes = list(backend) if isinstance(backend, (list, tuple)) else [backend]
+        if len(bes) != E or not all(isinstance(b, emcee.backends.Backend) for b in bes):
+            raise ValueError(f"backend must be a path or {E} emcee backend(s), one per ensemble")
+    resumed = []
+    for k, be in enumerate(bes):
+        digest = problem.digest(options, k)
+        if be.initialized and be.iteration > 0:
+            where = f"{be.filename}:{be.name}" if hasattr(be, "filename") else f"backend {k}"
+            stored = _stored_digest(be)
+            if stored != digest and tuple(int(v) for v in be.shape) == shape:
+                raise ValueError(
+                    f"{where} was written for other data or settings (digest "
+                    f"{str(stored)[:12]} != {digest[:12]}: data, geometries, noise, systematic, "
+                    "covariance, sigma, priors, walkers or moves differ); resuming would mix two "
+                    "posteriors: use another file or group name, or delete it"
+                )
+            if stored != digest:
+                raise ValueError(
+                    f"{where} holds a chain of shape {tuple(int(v) for v in be.shape)}, not "
+                    f"{shape} "
+                    "(other data or settings: other walkers or sampled parameters)"
+                )
+            resumed.append(True)
+        else:
+            be.reset(*shape)
+            _store_digest(be, digest)
+            resumed.append(False)
+    return bes, resumed
+
+
+def _stored_digest(be):
+    if hasattr(be, "filename"):
+        with be.open() as f:
+            return f[be.name].attrs.get("scatterlab_digest")
+    return getattr(be, "scatterlab_digest", None)
+
+
+def _store_digest(be, digest):
+    if hasattr(be, "filename"):
+        with be.open("a") as f:
+            f[be.name].attrs["scatterlab_digest"] = digest
+    else:
+        be.scatterlab_digest = digest
+
+
+# -- run until converged
+# ----------------------------------------------------------------------------------------
+def run_ensembles(
+    log_prob, ndim: int, starts, options: SamplerOptions, seeds, backends=None
+) -> list:
+    """Run ``len(seeds)`` independent emcee ensembles until converged (the *run* piece).
+
+    Parameters
+    ----------
+    log_prob : callable (W, D) -> (W,)
+        Vectorised log posterior.
+    ndim : int
+    starts : list of arrays (n_walkers, D) or None (None: continue the backend's chain)
+    options : SamplerOptions
+    seeds : sequence of int -- one per ensemble.
+    backends : list of emcee backends or None
+
+    Returns
+    -------
+    list of emcee.EnsembleSampler
+        With ``options.n_steps`` each runs to that length; otherwise all are extended in blocks of
+        ``options.block`` until each is ``min_tau_multiple`` tau long, tau is stable to 5 % and the
+        between-ensemble R-hat is below 1.01, or ``max_steps`` is reached.
+    """
+    import emcee
+
+    E = len(seeds)
+    backends = backends if backends is not None else [None] * E
+    moves = _emcee_moves(options.moves)
+    samplers = []
+    for k in range(E):
+        s = emcee.EnsembleSampler(
+            options.n_walkers, ndim, log_prob, vectorize=True, backend=backends[k], moves=moves
+        )
+        s.random_state = np.random.RandomState(int(seeds[k]) % 2**32).get_state()
+        samplers.append(s)
+    fixed = options.n_steps is not None
+    target = options.n_steps if fixed else options.max_steps
+    old_tau = np.inf
+    pending = list(starts)
+    while True:
+        for k, s in enumerate(samplers):
+            todo = target - s.iteration if fixed else min(options.block, target - s.iteration)
+            if todo > 0:
+                s.run_mcmc(
+                    pending[k] if s.iteration == 0 else None, todo, progress=options.progress
+                )
+        if fixed or min(s.iteration for s in samplers) >= target:
+            return samplers
+        tau = np.array([s.get_autocorr_time(tol=0) for s in samplers])  # (E, D)
+        steps = min(s.iteration for s in samplers)
+        burn = int(min(np.ceil(2 * np.max(tau)), steps // 2))
+        chain = np.concatenate(
+            [s.get_chain(discard=burn)[: steps - burn] for s in samplers], axis=1
+        )
+        agree = np.all(ensemble_rhat(chain, E) < RHAT_MAX)
+        stable = np.all(np.abs(old_tau - tau) < 0.05 * tau)
+        if steps >= options.min_tau_multiple * np.max(tau) and stable and agree:
+            return samplers
+        old_tau = tau
+
+
+# -- diagnose
+# --------------------------------------------------------------------------------------------------
+def _clusters(walker_medians: np.ndarray, within_sd: np.ndarray, rng) -> list[dict]:
+    """One or two clusters of walkers (see the module docstring)."""
+    from scipy.cluster.vq import kmeans2
+
+    W = walker_medians.shape[0]
+    scale = np.where(within_sd > 0, within_sd, 1.0)
+    z = walker_medians / scale
+    single = [{"weight": 1.0, "median": np.median(walker_medians, 0)}]
+    if W < 4 or np.allclose(z, z[0]):
+        return single
+    seed = int(rng.integers(2**31))
+    centroids, labels = kmeans2(z, 2, seed=seed, minit="++")
+    counts = np.bincount(labels, minlength=2)
+    if counts.min() < 2 or np.linalg.norm(centroids[0] - centroids[1]) < 6.0:
+        return single
+    return [
+        {"weight": float(counts[k] / W), "median": np.median(walker_medians[labels == k], 0)}
+        for k in np.argsort(-counts)
+    ]
+
+
+def _physical_chain(problem: PosteriorProblem, x):
+    """Sampler coordinates (S, W, D) -> chain (S, W, 3) and noise chain (S, W) or None."""
+    S, W, D = x.shape
+    p, s = problem.log_post.physical(x.reshape(-1, D))
+    chain = np.empty((S * W, 3))
+    chain[:, : problem.P] = p
+    if problem.sigma is not None:
+        chain[:, 2] = problem.sigma
+    return chain.reshape(S, W, 3), None if s is None else s.reshape(S, W)
+
+
+def _sampled(problem, chain, noise_chain):
+    """The sampled coordinates (..., D') in physical units and their names."""
+    names = list(PARAMETERS[: problem.P]) + (["noise"] if noise_chain is not None else [])
+    x = chain[..., : problem.P]
+    return (x if noise_chain is None else np.concatenate([x, noise_chain[..., None]], -1)), names
+
+
+def _convergence(n_steps, tmax, acceptance, rhat, options, E) -> list[str]:
+    """Reasons why the run is not converged (empty when it is)."""
+    out = []
+    if not n_steps >= options.min_tau_multiple * tmax:
+        out.append(
+            f"chain of {n_steps} steps is shorter than {options.min_tau_multiple:g} "
+            "autocorrelation times "
+            f"(tau = {tmax:.1f}); quantiles may be off: run longer (n_steps or max_steps)"
+        )
+    if not np.all((acceptance >= ACCEPTANCE[0]) & (acceptance <= ACCEPTANCE[1])):
+        out.append(
+            f"acceptance fraction(s) {np.round(acceptance, 2).tolist()} outside {list(ACCEPTANCE)}"
+        )
+    if not np.all(rhat < RHAT_MAX):
+        what = (
+            f"between the {E} independent ensembles"
+            if E > 1
+            else "between the halves of the one ensemble"
+        )
+        out.append(
+            f"R-hat {np.round(rhat, 3).tolist()} {what} is not below {RHAT_MAX}: the chains "
+            "disagree "
+            "(other modes or too short)"
+        )
+    return out
+
+
+def diagnose(
+    problem: PosteriorProblem,
+    samplers: list,
+    options: SamplerOptions,
+    minima: list,
+    messages: list,
+    rng,
+    seconds: float = float("nan"),
+) -> Posterior:
+    """Burn-in, thinning, tau, ESS, between-ensemble R-hat, acceptance and modes ->
+    :class:`Posterior`."""
+    E = len(samplers)
+    n_steps = min(s.iteration for s in samplers)
+    tau = np.max(
+        [s.get_autocorr_time(tol=0) for s in samplers], axis=0
+    )  # (D,), the slowest ensemble
+    tmax = float(np.max(tau))
+    burn = int(min(np.ceil(2 * tmax), n_steps // 2))
+    thin = max(1, int(tmax // 2))
+    kept = len(range(burn + thin - 1, n_steps, thin))
+    x = np.concatenate([s.get_chain(discard=burn, thin=thin)[:kept] for s in samplers], axis=1)
+    lp = np.concatenate([s.get_log_prob(discard=burn, thin=thin)[:kept] for s in samplers], axis=1)
+    raw = np.concatenate([s.get_chain(discard=burn)[: n_steps - burn] for s in samplers], axis=1)
+    chain, noise_chain = _physical_chain(problem, x)
+    raw_phys, _ = _sampled(problem, *_physical_chain(problem, raw))
+    ess = effective_sample_size(raw_phys)
+    rhat = ensemble_rhat(raw_phys, E)
+    acceptance = np.array([np.mean(s.acceptance_fraction) for s in samplers])
+    reasons = _convergence(n_steps, tmax, acceptance, rhat, options, E)
+    messages = list(messages) + reasons
+    half = chain[chain.shape[0] // 2 :, :, : problem.P]
+    modes = _clusters(np.median(half, 0), np.sqrt(np.mean(np.var(half, 0), 0)), rng)
+    for m in modes:
+        if problem.sigma is not None:
+            m["median"] = np.r_[m["median"], problem.sigma]
+        m["median"] = np.asarray(m["median"], float)
+    if len(modes) > 1:
+        messages.append(
+            "multimodal posterior: "
+            + "; ".join(
+                f"{m['weight']:.0%} of walkers near n={m['median'][0]:.4g}, "
+                f"kappa={m['median'][1]:.4g}"
+                for m in modes
+            )
+        )
+    b = dict(DEFAULT_BOUNDS, **(problem.prior.bounds or {}))
+    return Posterior(
+        chain=chain,
+        noise_chain=noise_chain,
+        log_prob=lp,
+        tau=tau,
+        n_steps=int(n_steps),
+        burn=burn,
+        thin=thin,
+        acceptance=float(np.mean(acceptance)),
+        rhat=rhat,
+        converged=not reasons,
+        modes=modes,
+        least_squares=minima,
+        dolp=problem.dolp,
+        theta_i=problem.theta_i,
+        theta_r=problem.theta_r,
+        phi=problem.phi,
+        noise=problem.noise,
+        sigma_known=problem.sigma,
+        kappa_prior=problem.prior.kappa_prior,
+        bounds={k: list(v) for k, v in b.items()},
+        model_kw=dict(problem.model_kw),
+        messages=messages,
+        seconds=seconds,
+        n_ensembles=E,
+        ess=ess,
+        convergence_reason="; ".join(reasons),
+        systematic=problem.systematic,
+        covariance=problem.covariance,
+    )
+
+
+# -- the result
+# --------------------------------------------------------------------------------------------------
 @dataclass
 class Posterior:
     """Posterior samples of (n, kappa, sigma) for one measurement vector, with diagnostics.
 
     Attributes
     ----------
-    chain : ndarray (steps, walkers, 3)
-        Kept samples (after burn-in and thinning) of (n, kappa, sigma); sigma is constant when it was known.
+    chain : ndarray (steps, n_ensembles * walkers, 3)
+        Kept samples (after burn-in and thinning) of (n, kappa, sigma); sigma is constant when it
+        was known.
+        The walkers of ensemble k are the k-th contiguous block of axis 1.
     noise_chain : ndarray (steps, walkers) or None
         Samples of the DOLP noise level when it was a parameter.
     log_prob : ndarray (steps, walkers)
-    tau : ndarray (P,) -- integrated autocorrelation time [steps] of the sampled parameters.
+    tau : ndarray (D,) -- integrated autocorrelation time [steps] of the sampled coordinates
+    (slowest ensemble).
     n_steps, burn, thin : int
     acceptance : float -- mean acceptance fraction.
-    rhat : ndarray (P,)
-    converged : bool -- run length >= min_tau_multiple * tau, acceptance in [0.15, 0.7] and R-hat < 1.05.
-    modes : list of dict -- ``{"weight", "median": (3,)}`` per cluster of walkers; two or more: multimodal.
-    least_squares : list of DolpFit -- the least-squares minima the walkers started from (best first).
+    rhat : ndarray (D,) -- R-hat between the independent ensembles (:func:`ensemble_rhat`) of the
+    sampled
+        parameters (n, kappa[, sigma][, noise]).
+    converged : bool -- run length >= min_tau_multiple * tau, acceptance in [0.15, 0.7] and R-hat <
+    1.01;
+        ``convergence_reason`` says what failed.
+    modes : list of dict -- ``{"weight", "median": (3,)}`` per cluster of walkers; two or more:
+    multimodal.
+    least_squares : list of DolpFit -- the least-squares minima the walkers started from (best
+    first).
     dolp, theta_i, theta_r, phi : the data and geometries.
     noise : float or None; sigma_known : float or None; kappa_prior : str; bounds : dict
     messages : list of str -- warnings raised during sampling, kept for the report.
     seconds : float -- wall time of the sampling.
+    n_ensembles : int
+    ess : ndarray (D,) -- effective sample size per sampled parameter
+    (:func:`effective_sample_size`).
+    systematic : ndarray (M,) or None; covariance : ndarray (M, M) or None -- the error model.
     """
 
     chain: np.ndarray
@@ -154,6 +1073,11 @@ class Posterior:
     model_kw: dict = field(default_factory=dict)
     messages: list = field(default_factory=list)
     seconds: float = float("nan")
+    n_ensembles: int = 1
+    ess: np.ndarray | None = None
+    convergence_reason: str = ""
+    systematic: np.ndarray | None = None
+    covariance: np.ndarray | None = None
 
     @property
     def samples(self) -> np.ndarray:
@@ -165,8 +1089,16 @@ class Posterior:
         return len(self.modes) > 1
 
     @property
+    def sampled_names(self) -> list[str]:
+        """Names of the sampled parameters, the order of ``tau``, ``rhat`` and ``ess``."""
+        P = 2 if self.sigma_known is not None else 3
+        return list(PARAMETERS[:P]) + (["noise"] if self.noise_chain is not None else [])
+
+    @property
     def n_effective(self) -> float:
-        """Effective number of independent samples, ``walkers * (steps - burn) / max tau``."""
+        """Smallest effective sample size over the sampled parameters."""
+        if self.ess is not None and np.any(np.isfinite(self.ess)):
+            return float(np.nanmin(self.ess))
         return float(self.chain.shape[1] * (self.n_steps - self.burn) / np.max(self.tau))
 
     def quantiles(self, q) -> np.ndarray:
@@ -178,295 +1110,263 @@ class Posterior:
         a = (1 - level) / 2
         return self.quantiles([a, 1 - a])
 
+    def data_error(self) -> np.ndarray:
+        """Standard deviation (M,) of the DOLP errors of the likelihood (noise median with an
+        inferred noise)."""
+        syst2 = 0.0 if self.systematic is None else self.systematic**2
+        if self.covariance is not None:
+            return np.sqrt(np.diag(self.covariance) + syst2)
+        s = self.noise if self.noise is not None else float(np.median(self.noise_chain))
+        return np.sqrt(s**2 + syst2) * np.ones(self.dolp.size)
+
     def summary(self) -> dict:
-        """Medians, 68 % and 95 % credible intervals, mean and std per parameter, with the least-squares
-        value and its Laplace standard error beside them, and the diagnostics (JSON-ready)."""
+        """Medians, 68 % and 95 % credible intervals, mean and std per parameter, with the
+        least-squares
+        value and its Laplace standard error beside them, ESS and R-hat of the sampled ones, and the
+        diagnostics (JSON-ready)."""
         q = self.quantiles([0.025, 0.16, 0.5, 0.84, 0.975])
         ls = self.least_squares[0] if self.least_squares else None
+        ess = dict(
+            zip(
+                self.sampled_names,
+                np.asarray(
+                    self.ess if self.ess is not None else np.full(len(self.sampled_names), np.nan)
+                ).tolist(),
+            )
+        )
+        rhat = dict(zip(self.sampled_names, np.asarray(self.rhat).tolist()))
         params = {}
         for k, name in enumerate(PARAMETERS):
-            entry = {"median": q[2, k], "ci68": [q[1, k], q[3, k]], "ci95": [q[0, k], q[4, k]],
-                     "mean": float(self.samples[:, k].mean()), "std": float(self.samples[:, k].std())}
+            entry = {
+                "median": q[2, k],
+                "ci68": [q[1, k], q[3, k]],
+                "ci95": [q[0, k], q[4, k]],
+                "mean": float(self.samples[:, k].mean()),
+                "std": float(self.samples[:, k].std()),
+            }
             if ls is not None:
                 entry["least_squares"] = float(getattr(ls, name))
                 P = ls.covariance.shape[-1]
                 entry["laplace_error"] = float(ls.errors[k]) if k < P else 0.0
+            if name in ess:
+                entry["ess"], entry["rhat"] = ess[name], rhat[name]
             params[name] = entry
         if self.noise_chain is not None:
-            nq = np.quantile(self.noise_chain, [0.16, 0.5, 0.84])
-            params["noise"] = {"median": nq[1], "ci68": [nq[0], nq[2]]}
+            nq = np.quantile(self.noise_chain, [0.025, 0.16, 0.5, 0.84, 0.975])
+            params["noise"] = {
+                "median": nq[2],
+                "ci68": [nq[1], nq[3]],
+                "ci95": [nq[0], nq[4]],
+                "ess": ess["noise"],
+                "rhat": rhat["noise"],
+            }
         return {
             "parameters": params,
-            "diagnostics": {
-                "n_steps": self.n_steps, "burn": self.burn, "thin": self.thin,
-                "walkers": int(self.chain.shape[1]), "tau": self.tau.tolist(),
-                "steps_over_tau": float(self.n_steps / np.max(self.tau)),
-                "acceptance": self.acceptance, "rhat": self.rhat.tolist(),
-                "n_effective": self.n_effective, "converged": self.converged,
-                "multimodal": self.multimodal,
-                "modes": [{"weight": m["weight"], "median": list(m["median"])} for m in self.modes],
-                "seconds": self.seconds,
-            },
-            "prior": {"kappa": self.kappa_prior, "bounds": self.bounds,
-                      "noise": "known" if self.noise is not None else "log-uniform parameter"},
+            "diagnostics": self._diagnostics(ess),
+            "prior": self._prior(),
             "messages": list(self.messages),
         }
 
-    def predictive(self, rng, n_draws: int = 200, *, theta_i=None, theta_r=None, phi=None,
-                   with_noise: bool = False) -> np.ndarray:
-        """Posterior-predictive DOLP (n_draws, M') at the data's geometries or at new ones."""
+    def _diagnostics(self, ess) -> dict:
+        return {
+            "n_steps": self.n_steps,
+            "burn": self.burn,
+            "thin": self.thin,
+            "walkers": int(self.chain.shape[1]),
+            "n_ensembles": self.n_ensembles,
+            "tau": self.tau.tolist(),
+            "steps_over_tau": float(self.n_steps / np.max(self.tau)),
+            "acceptance": self.acceptance,
+            "rhat": np.asarray(self.rhat).tolist(),
+            "rhat_method": "split R-hat between independent ensembles pooled over walkers",
+            "ess": ess,
+            "n_effective": self.n_effective,
+            "converged": self.converged,
+            "convergence_reason": self.convergence_reason,
+            "multimodal": self.multimodal,
+            "modes": [{"weight": m["weight"], "median": list(m["median"])} for m in self.modes],
+            "seconds": self.seconds,
+        }
+
+    def _prior(self) -> dict:
+        noise = (
+            "covariance"
+            if self.covariance is not None
+            else "known"
+            if self.noise is not None
+            else "log-uniform parameter"
+        )
+        return {
+            "kappa": self.kappa_prior,
+            "bounds": self.bounds,
+            "noise": noise,
+            "systematic": None if self.systematic is None else self.systematic.tolist(),
+        }
+
+    def to_inference_data(self):
+        """The kept chains as an ArviZ ``InferenceData`` (chains = walkers, draws = kept steps).
+
+        Variables n, kappa, sigma (and noise when inferred); ``sample_stats.lp`` the log posterior;
+        attrs
+        ``n_ensembles``, ``walkers_per_ensemble``, ``burn``, ``thin``. Note that ArviZ's R-hat over
+        walkers
+        treats them as independent chains, which the walkers of one ensemble are not:
+        ``Posterior.rhat``
+        compares the ensembles.
+        """
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", FutureWarning)
+            import arviz as az
+
+        post = {name: self.chain[..., k].T for k, name in enumerate(PARAMETERS)}
+        if self.noise_chain is not None:
+            post["noise"] = self.noise_chain.T
+        attrs = {
+            "n_ensembles": self.n_ensembles,
+            "walkers_per_ensemble": self.chain.shape[1] // self.n_ensembles,
+            "burn": self.burn,
+            "thin": self.thin,
+            "converged": int(self.converged),
+        }
+        idata = az.from_dict(
+            posterior=post,
+            sample_stats={"lp": self.log_prob.T},
+            observed_data={"dolp": self.dolp},
+            dims={"dolp": ["geometry"]},
+            attrs=attrs,
+        )
+        idata.posterior.attrs.update(attrs)
+        return idata
+
+    def predictive(
+        self,
+        rng=None,
+        n_draws: int = 200,
+        *,
+        theta_i=None,
+        theta_r=None,
+        phi=None,
+        with_noise: bool = False,
+    ) -> np.ndarray:
+        """Posterior-predictive DOLP (n_draws, M') at the data's geometries or at new ones.
+
+        ``rng`` is anything :func:`numpy.random.default_rng` accepts. ``with_noise`` adds the
+        likelihood's
+        errors (only at the data's geometries when a systematic or covariance is part of it).
+        """
+        rng = np.random.default_rng(rng)
+        new = theta_i is not None or theta_r is not None or phi is not None
         ti = self.theta_i if theta_i is None else np.atleast_1d(theta_i)
         tr = self.theta_r if theta_r is None else np.atleast_1d(theta_r)
         ph = self.phi if phi is None else np.broadcast_to(phi, ti.shape)
         idx = rng.integers(0, self.samples.shape[0], n_draws)
-        draws = self.samples[idx]
-        y = DolpForward(ti, tr, ph, **self.model_kw)(draws)
+        y = DolpForward(ti, tr, ph, **self.model_kw)(self.samples[idx])
         if with_noise:
-            s = self.noise if self.noise is not None else self.noise_chain.ravel()[idx % self.noise_chain.size]
-            y = y + np.asarray(s)[..., None] * rng.standard_normal(y.shape)
+            if new and (self.systematic is not None or self.covariance is not None):
+                raise ValueError(
+                    "with_noise at new geometries is undefined with a systematic or covariance"
+                )
+            if self.covariance is not None:
+                C = self.covariance + np.diag(
+                    0.0 if self.systematic is None else self.systematic**2
+                )
+                return y + rng.standard_normal(y.shape) @ np.linalg.cholesky(C).T
+            s = (
+                self.noise
+                if self.noise is not None
+                else self.noise_chain.ravel()[idx % self.noise_chain.size]
+            )
+            syst2 = 0.0 if self.systematic is None else self.systematic**2
+            y = y + np.sqrt(np.asarray(s)[..., None] ** 2 + syst2) * rng.standard_normal(y.shape)
         return y
 
 
-class _LogPosterior:
-    """Vectorised log posterior over walkers (picklable)."""
-
-    def __init__(self, forward, y, lo, hi, fit_sigma, log_kappa, noise, noise_bounds):
-        self.forward, self.y, self.lo, self.hi = forward, y, lo, hi
-        self.fit_sigma, self.log_kappa, self.noise, self.noise_bounds = fit_sigma, log_kappa, noise, noise_bounds
-        self.mask = np.isfinite(y)
-        self.m = int(self.mask.sum())
-
-    def physical(self, x):
-        """Sampler coordinates (W, D) -> (n, kappa, sigma) (W, P) and noise (W,) or None."""
-        p = x[:, :3 if self.fit_sigma else 2].copy()
-        if self.log_kappa:
-            p[:, 1] = np.exp(p[:, 1])
-        s = None if self.noise is not None else np.exp(x[:, -1])
-        return p, s
-
-    def __call__(self, x):
-        x = np.atleast_2d(x)
-        out = np.full(x.shape[0], -np.inf)
-        inside = np.all((x >= self.lo) & (x <= self.hi), axis=1)
-        if not np.any(inside):
-            return out
-        p, s = self.physical(x[inside])
-        f = self.forward(p)
-        r = np.where(self.mask, f - np.where(self.mask, self.y, 0.0), 0.0)
-        chi2 = np.sum(r * r, -1)
-        if self.noise is not None:
-            out[inside] = -0.5 * chi2 / self.noise**2
-        else:  # log-uniform prior on s is uniform in log s: no Jacobian term
-            out[inside] = -0.5 * chi2 / s**2 - self.m * np.log(s)
-        return out
-
-
-def _clusters(walker_medians: np.ndarray, within_sd: np.ndarray, rng) -> list[dict]:
-    """One or two clusters of walkers (see the module docstring)."""
-    from scipy.cluster.vq import kmeans2
-
-    W = walker_medians.shape[0]
-    scale = np.where(within_sd > 0, within_sd, 1.0)
-    z = walker_medians / scale
-    single = [{"weight": 1.0, "median": np.median(walker_medians, 0)}]
-    if W < 4 or np.allclose(z, z[0]):
-        return single
-    seed = int(rng.integers(2**31))
-    centroids, labels = kmeans2(z, 2, seed=seed, minit="++")
-    counts = np.bincount(labels, minlength=2)
-    if counts.min() < 2 or np.linalg.norm(centroids[0] - centroids[1]) < 6.0:
-        return single
-    return [{"weight": float(counts[k] / W), "median": np.median(walker_medians[labels == k], 0)}
-            for k in np.argsort(-counts)]
-
-
-def sample_posterior(dolp, theta_i, theta_r, noise=None, rng=None, *, phi=np.pi, sigma=None, bounds=None,
-                     kappa_prior: str = "uniform", noise_bounds=(1e-5, 1.0), n_walkers: int = 32,
-                     n_steps: int | None = None, max_steps: int = 20000, block: int = 500,
-                     min_tau_multiple: float = 50.0, starts=DEFAULT_STARTS, mode_delta_chi2: float = 4.0,
-                     backend: str | Path | None = None, name: str = "posterior", progress: bool = False,
-                     moves: str = "kde", **model_kw) -> Posterior:
+# -- the entry points
+# ------------------------------------------------------------------------------------------------
+def sample_posterior(
+    dolp,
+    theta_i,
+    theta_r,
+    noise=None,
+    rng=None,
+    *,
+    phi=np.pi,
+    sigma=None,
+    systematic=None,
+    covariance=None,
+    prior: PriorOptions | None = None,
+    sampler: SamplerOptions | None = None,
+    backend=None,
+    name: str = "posterior",
+    **options,
+) -> Posterior:
     """Sample the posterior of (n, kappa, sigma) given DOLP at M geometries.
 
     Parameters
     ----------
     dolp : array (M,)
-        Measured DOLP; NaN entries are masked. (For many problems use :func:`sample_posteriors`.)
+        Measured DOLP in [0, 1] (a margin of ``max(0.05, 5 x the known error)`` is allowed for
+        noise); NaN
+        entries are masked. For many problems use :func:`sample_posteriors`.
     theta_i, theta_r : array (M,) [rad]
     noise : float or None
-        DOLP noise standard deviation; ``None`` makes it a parameter (log-uniform on ``noise_bounds``).
-    rng : numpy.random.Generator
-        Seeds the walkers' start and emcee's moves.
+        DOLP noise standard deviation (> 0); ``None`` makes it a parameter (log-uniform on
+        ``noise_bounds``), unless ``covariance`` is given.
+    rng : anything :func:`numpy.random.default_rng` accepts
+        Seeds the walkers' starts and emcee's moves (one seed per ensemble).
     phi : float or array (M,) [rad], default pi
     sigma : float, optional
         Known roughness (then only n and kappa are sampled).
-    bounds : dict, optional -- prior ranges, as for :func:`~scatterlab.inversion.fit_dolp`.
-    kappa_prior : "uniform" or "log-uniform"
-    n_walkers : int (>= 2 * dimensions)
-    n_steps : int, optional
-        Fixed chain length; ``None`` extends the chain in ``block``-step pieces until it is converged (module
-        docstring) or ``max_steps`` long.
-    backend : path, optional
-        HDF5 file for emcee's backend (checkpoint and resume); ``name`` is the group.
-    moves : "kde", "de" or "stretch"
-        emcee proposal: "kde" (default) mixes the Gaussian-KDE move (80 %) with differential evolution (20 %);
-        on the curved (n, kappa, sigma) posteriors it cuts tau about 10x against the stretch move (measured in
-        ``studies/performance/perf_mcmc.py``) for 1.5x the cost per step.
-    **model_kw : passed to :class:`scatterlab.pbrdf.Model`.
+    systematic : float or array (M,), optional
+        Known systematic DOLP error standard deviation per geometry, added in quadrature to the
+        noise.
+    covariance : array (M, M), optional
+        Full DOLP error covariance (correlated errors across geometries), used instead of ``noise``.
+    prior : PriorOptions, optional
+        Or the keywords ``bounds``, ``kappa_prior``, ``noise_bounds``.
+    sampler : SamplerOptions, optional
+        Or the keywords ``n_walkers``, ``n_ensembles``, ``n_steps``, ``max_steps``, ``block``,
+        ``min_tau_multiple``, ``moves``, ``starts``, ``mode_delta_chi2``, ``progress``.
+    backend : path, emcee backend or list of them, optional
+        HDF5 file for emcee's backend (checkpoint and resume; group ``<name>/ensemble_<k>``), or
+        emcee
+        backend objects, one per ensemble. Resuming with other data or settings is a ValueError.
+    **options
+        The prior and sampler keywords above, and ``shadowing``, ``diffuse``, ``distribution``
+        passed to
+        :class:`scatterlab.pbrdf.Model`.
 
     Returns
     -------
     Posterior
+        A :class:`ConvergenceWarning` is raised (and kept in ``messages``) when it is not converged.
     """
-    import time
-
-    import emcee
-
-    if rng is None or not isinstance(rng, np.random.Generator):
-        raise ValueError("rng must be a numpy.random.Generator (e.g. numpy.random.default_rng(seed))")
-    if kappa_prior not in ("uniform", "log-uniform"):
-        raise ValueError(f"kappa_prior must be 'uniform' or 'log-uniform', got {kappa_prior!r}")
-    if noise is not None and not (np.isfinite(noise) and noise > 0):
-        raise ValueError(f"noise must be a positive DOLP standard deviation or None, got {noise!r}")
-    if not (0 < noise_bounds[0] < noise_bounds[1]):
-        raise ValueError(f"noise_bounds must satisfy 0 < low < high, got {noise_bounds!r}")
-    y, ti, tr, ph = _prepare(dolp, theta_i, theta_r, phi)
-    if y.ndim != 1:
-        raise ValueError(f"dolp must be one measurement vector (M,); got shape {y.shape}: use sample_posteriors")
-    fit_sigma = sigma is None
-    P = 3 if fit_sigma else 2
-    if np.isfinite(y).sum() < P + (noise is None):
-        raise ValueError(f"dolp has {int(np.isfinite(y).sum())} finite values; at least {P + (noise is None)} "
-                         "are needed for the unknowns")
-    lo, hi = _bounds(bounds, P)
-    b = dict(DEFAULT_BOUNDS, **(bounds or {}))
-    log_kappa = kappa_prior == "log-uniform"
-    s_lo, s_hi = lo.copy(), hi.copy()
-    if log_kappa:
-        s_lo[1], s_hi[1] = np.log(max(lo[1], KAPPA_FLOOR)), np.log(hi[1])
-    if noise is None:
-        s_lo, s_hi = np.r_[s_lo, np.log(noise_bounds[0])], np.r_[s_hi, np.log(noise_bounds[1])]
-    D = s_lo.size
-    if n_walkers < 2 * D:
-        raise ValueError(f"n_walkers must be at least {2 * D} (twice the number of sampled parameters)")
-    forward = DolpForward(ti, tr, ph, sigma=None if fit_sigma else float(sigma), **model_kw)
-    log_post = _LogPosterior(forward, y, s_lo, s_hi, fit_sigma, log_kappa, noise, noise_bounds)
-
-    minima = local_minima(y, ti, tr, ph, sigma=sigma, bounds=bounds, starts=starts, noise=noise,
-                          delta_chi2=mode_delta_chi2, **model_kw)
+    rng = np.random.default_rng(rng)
+    prior, opts, model_kw = _resolve_options(prior, sampler, dict(options))
+    problem = posterior_problem(
+        dolp,
+        theta_i,
+        theta_r,
+        noise,
+        phi=phi,
+        sigma=sigma,
+        systematic=systematic,
+        covariance=covariance,
+        prior=prior,
+        model_kw=model_kw,
+    )
+    opts.validate(problem.ndim)
+    backends, resumed = _open_backends(backend, name, problem, opts)
     messages: list[str] = []
-    if len(minima) > 1:
-        messages.append(f"{len(minima)} least-squares minima within delta chi2 = {mode_delta_chi2}: "
-                        + "; ".join(f"n={float(f.n):.4g}, kappa={float(f.kappa):.4g}, sigma={float(f.sigma):.4g}"
-                                    for f in minima))
-
-    def start_ball(count):
-        x = np.empty((count, D))
-        which = np.arange(count) % max(len(minima), 1)
-        for w in range(count):
-            if minima:
-                f = minima[which[w]]
-                centre = np.array([float(f.n), float(f.kappa), float(f.sigma)])[:P]
-                err = np.nan_to_num(np.asarray(f.errors, float), nan=0.0)
-            else:
-                centre, err = (lo + hi) / 2, (hi - lo) / 4
-            width = np.clip(err, 1e-6 * (hi - lo), 0.05 * (hi - lo))
-            x[w, :P] = centre + 0.5 * width * rng.standard_normal(P)
-            if noise is None:
-                resid = np.sqrt(2 * float(minima[0].cost) / max(np.isfinite(y).sum() - P, 1)) if minima else 0.01
-                x[w, -1] = np.log(np.clip(resid, noise_bounds[0] * 1.01, noise_bounds[1] / 1.01)) \
-                    + 0.1 * rng.standard_normal()
-        if log_kappa:
-            x[:, 1] = np.log(np.maximum(x[:, 1], KAPPA_FLOOR * 1.01))
-        eps = 1e-9 * (s_hi - s_lo)
-        return np.clip(x, s_lo + eps, s_hi - eps)
-
-    be = None
-    start = None
-    done_steps = 0
-    if backend is not None:
-        Path(backend).parent.mkdir(parents=True, exist_ok=True)
-        be = emcee.backends.HDFBackend(str(backend), name=name)
-        try:
-            done_steps = be.iteration
-        except Exception:  # new file or group
-            done_steps = 0
-        if done_steps > 0:
-            if be.shape != (n_walkers, D):
-                raise ValueError(f"backend {backend}:{name} holds a chain of shape {be.shape}, not ({n_walkers}, {D})")
-        else:
-            be.reset(n_walkers, D)
-    move_sets = {"kde": [(emcee.moves.KDEMove(), 0.8), (emcee.moves.DEMove(), 0.2)],
-                 "de": [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)],
-                 "stretch": [(emcee.moves.StretchMove(), 1.0)]}
-    if moves not in move_sets:
-        raise ValueError(f"moves must be one of {sorted(move_sets)}, got {moves!r}")
-    sampler = emcee.EnsembleSampler(n_walkers, D, log_post, vectorize=True, backend=be, moves=move_sets[moves])
-    sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
-    if done_steps == 0:
-        start = start_ball(n_walkers)
-
+    minima = _problem_minima(problem, opts, messages)
+    starts = [None if r else start_walkers(problem, minima, opts.n_walkers, rng) for r in resumed]
+    seeds = rng.integers(2**32, size=opts.n_ensembles)
     t0 = time.perf_counter()
-    tau = np.full(D, np.inf)
-    target = n_steps if n_steps is not None else max_steps
-    old_tau = np.inf
-    while done_steps < target:
-        steps = min(block if n_steps is None else target - done_steps, target - done_steps)
-        sampler.run_mcmc(start, steps, progress=progress)
-        start = None
-        done_steps = sampler.iteration
-        tau = sampler.get_autocorr_time(tol=0)
-        if n_steps is None:
-            stable = np.all(np.abs(old_tau - tau) < 0.05 * tau)
-            if done_steps >= min_tau_multiple * np.max(tau) and stable:
-                break
-            old_tau = tau
-    seconds = time.perf_counter() - t0
-
-    tau = sampler.get_autocorr_time(tol=0)
-    tmax = float(np.max(tau))
-    burn = int(min(np.ceil(2 * tmax), done_steps // 2))
-    thin = max(1, int(tmax // 2))
-    x = sampler.get_chain(discard=burn, thin=thin)  # (S, W, D)
-    lp = sampler.get_log_prob(discard=burn, thin=thin)
-    S, W = x.shape[:2]
-    p, s = log_post.physical(x.reshape(-1, D))
-    chain = np.empty((S * W, 3))
-    chain[:, :P] = p
-    if not fit_sigma:
-        chain[:, 2] = float(sigma)
-    chain = chain.reshape(S, W, 3)
-    noise_chain = None if s is None else s.reshape(S, W)
-    acceptance = float(np.mean(sampler.acceptance_fraction))
-    sampled = chain[..., :P] if noise_chain is None else np.concatenate([chain[..., :P], noise_chain[..., None]], -1)
-    rhat = split_rhat(sampled)
-    long_enough = done_steps >= min_tau_multiple * tmax
-    if not long_enough:
-        messages.append(f"chain of {done_steps} steps is shorter than {min_tau_multiple:g} autocorrelation times "
-                        f"(tau = {tmax:.1f}); quantiles may be off: run longer (n_steps or max_steps)")
-    if not 0.15 <= acceptance <= 0.7:
-        messages.append(f"mean acceptance fraction {acceptance:.2f} is outside [0.15, 0.7]")
-    if np.any(rhat > 1.05):
-        messages.append(f"split R-hat {np.round(rhat, 3).tolist()} exceeds 1.05: walkers disagree")
-    half = chain[S // 2:, :, :P]
-    modes = _clusters(np.median(half, 0), np.sqrt(np.mean(np.var(half, 0), 0)), rng)
-    for m in modes:
-        if not fit_sigma:
-            m["median"] = np.r_[m["median"], float(sigma)]
-        m["median"] = np.asarray(m["median"], float)
-    if len(modes) > 1:
-        messages.append("multimodal posterior: " + "; ".join(
-            f"{m['weight']:.0%} of walkers near n={m['median'][0]:.4g}, kappa={m['median'][1]:.4g}" for m in modes))
-    for msg in messages:
-        if "autocorrelation" in msg or "acceptance" in msg or "R-hat" in msg:
-            warnings.warn(msg, ConvergenceWarning, stacklevel=2)
-    return Posterior(chain=chain, noise_chain=noise_chain, log_prob=lp, tau=tau, n_steps=int(done_steps),
-                     burn=burn, thin=thin, acceptance=acceptance, rhat=rhat,
-                     converged=bool(long_enough and 0.15 <= acceptance <= 0.7 and np.all(rhat < 1.05)),
-                     modes=modes, least_squares=minima, dolp=y, theta_i=ti, theta_r=tr, phi=ph, noise=noise,
-                     sigma_known=None if fit_sigma else float(sigma), kappa_prior=kappa_prior,
-                     bounds={k: list(v) for k, v in b.items()}, model_kw=dict(model_kw), messages=messages,
-                     seconds=seconds)
+    samplers = run_ensembles(problem.log_post, problem.ndim, starts, opts, seeds, backends)
+    post = diagnose(problem, samplers, opts, minima, messages, rng, time.perf_counter() - t0)
+    if not post.converged:
+        warnings.warn(post.convergence_reason, ConvergenceWarning, stacklevel=2)
+    return post
 
 
 def _sample_task(task):
@@ -476,24 +1376,52 @@ def _sample_task(task):
         return sample_posterior(y, *args, rng=np.random.default_rng(seed), **kw)
 
 
-def sample_posteriors(dolp, theta_i, theta_r, noise=None, rng=None, *, executor=None, backend=None,
-                      **kw) -> list[Posterior]:
-    """:func:`sample_posterior` for each row of ``dolp`` (K, M) -- regions or pixels -- through an executor.
+def _per_problem(value, k, ndim_shared):
+    """Row k of a per-problem array (one more axis than the shared form), or the shared value."""
+    if value is None or np.ndim(value) <= ndim_shared:
+        return value
+    return np.asarray(value)[k]
 
-    Each problem gets its own seed drawn from ``rng``, so results do not depend on the executor. With
-    ``backend`` (a directory) problem k is checkpointed in ``backend/problem_k.h5``. Convergence warnings are
-    collected in each posterior's ``messages`` rather than raised.
+
+def sample_posteriors(
+    dolp,
+    theta_i,
+    theta_r,
+    noise=None,
+    rng=None,
+    *,
+    executor=None,
+    backend=None,
+    systematic=None,
+    covariance=None,
+    **kw,
+) -> list[Posterior]:
+    """:func:`sample_posterior` for each row of ``dolp`` (K, M) -- regions or pixels -- through an
+    executor.
+
+    Each problem gets its own seed drawn from ``rng`` (anything :func:`numpy.random.default_rng`
+    accepts), so
+    results do not depend on the executor. ``systematic`` may be (M,) shared or (K, M) per problem,
+    and
+    ``covariance`` (M, M) shared or (K, M, M). With ``backend`` (a directory) problem k is
+    checkpointed in
+    ``backend/problem_k.h5``. Convergence warnings are collected in each posterior's ``messages``
+    rather than
+    raised.
     """
     from scatterlab.runtime import get_executor
 
-    if rng is None or not isinstance(rng, np.random.Generator):
-        raise ValueError("rng must be a numpy.random.Generator")
+    rng = np.random.default_rng(rng)
     y = np.atleast_2d(np.asarray(dolp, float))
     seeds = rng.integers(2**63, size=y.shape[0])
     tasks = []
     for k, row in enumerate(y):
-        kk = dict(kw)
-        if backend is not None:  # one file per problem: HDF5 files are not safe for concurrent writers
+        kk = dict(
+            kw, systematic=_per_problem(systematic, k, 1), covariance=_per_problem(covariance, k, 2)
+        )
+        if (
+            backend is not None
+        ):  # one file per problem: HDF5 files are not safe for concurrent writers
             kk.update(backend=str(Path(backend) / f"problem_{k}.h5"), name="posterior")
         tasks.append((row, int(seeds[k]), (theta_i, theta_r, noise), kk))
     ex = executor if executor is not None else get_executor("serial")

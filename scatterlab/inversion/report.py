@@ -1,9 +1,12 @@
-"""MCMC uncertainty reports: corner plot, traces, posterior-predictive DOLP band, credible-interval table.
+"""MCMC uncertainty reports: corner plot, traces, posterior-predictive DOLP band, credible-interval
+table.
 
 :func:`posterior_report` writes, for one :class:`~scatterlab.inversion.Posterior`, into ``out/``:
 ``<name>_corner.png`` (the ``corner`` package), ``<name>_trace.png``, ``<name>_predictive.png`` and
-``<name>.md`` (medians, 68/95 % credible intervals beside the least-squares value and its Laplace error, and
-the diagnostics). :func:`report_index` writes ``index.md`` over several. Files are written atomically and
+``<name>.md`` (medians, 68/95 % credible intervals beside the least-squares value and its Laplace
+error, and
+the diagnostics). :func:`report_index` writes ``index.md`` over several. Files are written
+atomically and
 never overwrite silently. matplotlib and corner are imported here only.
 """
 
@@ -33,7 +36,8 @@ def _save(fig, path: Path, overwrite: bool) -> None:
 
 
 def summary_table(post: Posterior, truth=None) -> str:
-    """Markdown table: median, 68 % and 95 % intervals, least squares +/- Laplace error (and truth)."""
+    """Markdown table: median, 68 % and 95 % intervals, least squares +/- Laplace error (and
+    truth)."""
     s = post.summary()["parameters"]
     head = "| parameter | median | 68 % interval | 95 % interval | least squares +/- Laplace |"
     sep = "|---|---|---|---|---|"
@@ -43,46 +47,90 @@ def summary_table(post: Posterior, truth=None) -> str:
     rows = [head, sep]
     for k, name in enumerate(PARAMETERS):
         p = s[name]
-        row = (f"| {name} | {p['median']:.4g} | [{p['ci68'][0]:.4g}, {p['ci68'][1]:.4g}] | "
-               f"[{p['ci95'][0]:.4g}, {p['ci95'][1]:.4g}] | "
-               f"{p.get('least_squares', float('nan')):.4g} +/- {p.get('laplace_error', float('nan')):.2g} |")
+        row = (
+            f"| {name} | {p['median']:.4g} | [{p['ci68'][0]:.4g}, {p['ci68'][1]:.4g}] | "
+            f"[{p['ci95'][0]:.4g}, {p['ci95'][1]:.4g}] | "
+            f"{p.get('least_squares', float('nan')):.4g} +/- "
+            f"{p.get('laplace_error', float('nan')):.2g} |"
+        )
         if truth is not None:
             row += f" {truth[k]:.4g} |"
         rows.append(row)
     if "noise" in s:
-        rows.append(f"| noise | {s['noise']['median']:.3g} | [{s['noise']['ci68'][0]:.3g}, "
-                    f"{s['noise']['ci68'][1]:.3g}] | | |" + (" |" if truth is not None else ""))
+        rows.append(
+            f"| noise | {s['noise']['median']:.3g} | [{s['noise']['ci68'][0]:.3g}, "
+            f"{s['noise']['ci68'][1]:.3g}] | | |" + (" |" if truth is not None else "")
+        )
     return "\n".join(rows)
 
 
-def posterior_report(post: Posterior, out, name: str = "posterior", *, rng=None, truth=None,
-                     overwrite: bool = False) -> Path:
-    """Write the figures and the Markdown report of one posterior; returns the Markdown path."""
-    import corner
+def posterior_report(
+    post: Posterior, out, name: str = "posterior", *, rng=None, truth=None, overwrite: bool = False
+) -> Path:
+    """Write the figures and the Markdown report of one posterior; returns the Markdown path.
+
+    Parameters
+    ----------
+    post : Posterior
+    out : path -- directory for ``<name>.md`` and the PNG figures.
+    name : str
+    rng : anything :func:`numpy.random.default_rng` accepts
+        Draws the posterior-predictive band; ``None`` takes fresh entropy, so give a seed for a
+        reproducible figure.
+    truth : (n, kappa, sigma), optional -- shown beside the estimates (simulations).
+    overwrite : bool -- replace existing files (otherwise FileExistsError).
+    """
     import matplotlib
 
     matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    rng = rng if rng is not None else np.random.default_rng(0)
     P = 2 if post.sigma_known is not None else 3
-    samples = post.samples[:, :P]
     labels = [LABELS[p] for p in PARAMETERS[:P]]
-    fig = corner.corner(samples, labels=labels, quantiles=[0.16, 0.5, 0.84], show_titles=True,
-                        truths=None if truth is None else list(truth)[:P], title_fmt=".3g")
-    _save(fig, out / f"{name}_corner.png", overwrite)
+    _save(_corner_figure(post, labels, truth), out / f"{name}_corner.png", overwrite)
+    _save(_trace_figure(post, labels), out / f"{name}_trace.png", overwrite)
+    _save(
+        _predictive_figure(post, np.random.default_rng(rng)),
+        out / f"{name}_predictive.png",
+        overwrite,
+    )
+    path = out / f"{name}.md"
+    write_text(path, _markdown(post, name, truth), overwrite=overwrite)
+    return path
 
-    fig, axes = plt.subplots(P, 1, figsize=(7, 1.8 * P), sharex=True)
+
+def _corner_figure(post, labels, truth):
+    import corner
+
+    P = len(labels)
+    return corner.corner(
+        post.samples[:, :P],
+        labels=labels,
+        quantiles=[0.16, 0.5, 0.84],
+        show_titles=True,
+        truths=None if truth is None else list(truth)[:P],
+        title_fmt=".3g",
+    )
+
+
+def _trace_figure(post, labels):
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(len(labels), 1, figsize=(7, 1.8 * len(labels)), sharex=True)
     axes = np.atleast_1d(axes)
     steps = np.arange(post.chain.shape[0]) * post.thin + post.burn
     for k, ax in enumerate(axes):
         ax.plot(steps, post.chain[:, :, k], lw=0.4, alpha=0.4, color="k")
         ax.set_ylabel(labels[k])
     axes[-1].set_xlabel("step (after burn-in, thinned)")
-    fig.suptitle(f"traces: tau = {np.round(post.tau, 1).tolist()}, acceptance {post.acceptance:.2f}")
-    _save(fig, out / f"{name}_trace.png", overwrite)
+    fig.suptitle(
+        f"traces: tau = {np.round(post.tau, 1).tolist()}, acceptance {post.acceptance:.2f}"
+    )
+    return fig
+
+
+def _predictive_figure(post, rng):
+    import matplotlib.pyplot as plt
 
     order = np.argsort(post.theta_i + 1e-3 * post.theta_r)
     pred = post.predictive(rng, 400)[:, order]
@@ -91,42 +139,63 @@ def posterior_report(post: Posterior, out, name: str = "posterior", *, rng=None,
     fig, ax = plt.subplots(figsize=(7, 3.5))
     ax.fill_between(x, lo, hi, color="C0", alpha=0.3, label="95 % posterior predictive (model)")
     ax.plot(x, mid, color="C0", label="posterior median model")
-    err = post.noise if post.noise is not None else float(np.median(post.noise_chain))
-    ax.errorbar(x, post.dolp[order], yerr=err, fmt="o", color="k", ms=3, label="data +/- noise")
-    ax.set_xticks(x, [f"{np.degrees(a):.0f}/{np.degrees(b):.0f}" for a, b in
-                      zip(post.theta_i[order], post.theta_r[order])], rotation=60, fontsize=7)
+    err = post.data_error()[order]
+    ax.errorbar(x, post.dolp[order], yerr=err, fmt="o", color="k", ms=3, label="data +/- error")
+    ticks = [
+        f"{np.degrees(a):.0f}/{np.degrees(b):.0f}"
+        for a, b in zip(post.theta_i[order], post.theta_r[order])
+    ]
+    ax.set_xticks(x, ticks, rotation=60, fontsize=7)
     ax.set_xlabel(r"$\theta_i / \theta_r$ [deg]")
     ax.set_ylabel("DOLP")
     ax.legend(fontsize=7)
-    _save(fig, out / f"{name}_predictive.png", overwrite)
+    return fig
 
+
+def _markdown(post, name, truth) -> str:
     d = post.summary()["diagnostics"]
-    lines = [f"# Posterior: {name}", "", summary_table(post, truth), "",
-             f"Diagnostics: {d['n_steps']} steps x {d['walkers']} walkers, burn-in {d['burn']}, thin {d['thin']}; "
-             f"tau = {np.round(d['tau'], 1).tolist()} (run = {d['steps_over_tau']:.0f} tau); acceptance "
-             f"{d['acceptance']:.2f}; split R-hat {np.round(d['rhat'], 3).tolist()}; effective samples "
-             f"{d['n_effective']:.0f}; {'converged' if d['converged'] else '**not converged**'}; "
-             f"{'**multimodal**' if d['multimodal'] else 'one mode'}; {d['seconds']:.1f} s.", ""]
+    ess = {k: round(v) if np.isfinite(v) else v for k, v in d["ess"].items()}
+    state = "converged" if d["converged"] else "**not converged**: " + d["convergence_reason"]
+    lines = [
+        f"# Posterior: {name}",
+        "",
+        summary_table(post, truth),
+        "",
+        f"Diagnostics: {d['n_steps']} steps x {d['walkers']} walkers, burn-in {d['burn']}, "
+        f"thin {d['thin']}; tau = {np.round(d['tau'], 1).tolist()} "
+        f"(run = {d['steps_over_tau']:.0f} tau); acceptance {d['acceptance']:.2f}; "
+        f"R-hat between {d['n_ensembles']} ensembles "
+        f"{np.round(d['rhat'], 3).tolist()}; effective samples {ess}; {state}; "
+        f"{'**multimodal**' if d['multimodal'] else 'one mode'}; {d['seconds']:.1f} s.",
+        "",
+    ]
     if post.messages:
         lines += ["Warnings:", ""] + [f"- {m}" for m in post.messages] + [""]
-    lines += [f"![corner]({name}_corner.png)", "", f"![traces]({name}_trace.png)", "",
-              f"![predictive]({name}_predictive.png)", ""]
-    path = out / f"{name}.md"
-    write_text(path, "\n".join(lines), overwrite=overwrite)
-    return path
+    for kind in ("corner", "trace", "predictive"):
+        lines += [f"![{kind}]({name}_{kind}.png)", ""]
+    return "\n".join(lines)
 
 
-def report_index(out, entries: dict, *, title: str = "Posterior reports", overwrite: bool = False) -> Path:
+def report_index(
+    out, entries: dict, *, title: str = "Posterior reports", overwrite: bool = False
+) -> Path:
     """``index.md`` linking reports: ``entries`` maps a name to its Posterior."""
     out = Path(out)
-    lines = [f"# {title}", "", "| region | n (68 %) | kappa (68 %) | sigma (68 %) | converged | modes |",
-             "|---|---|---|---|---|---|"]
+    lines = [
+        f"# {title}",
+        "",
+        "| region | n (68 %) | kappa (68 %) | sigma (68 %) | converged | modes |",
+        "|---|---|---|---|---|---|",
+    ]
     for name, post in entries.items():
         s = post.summary()
         cells = []
         for p in PARAMETERS:
             q = s["parameters"][p]
             cells.append(f"{q['median']:.3g} [{q['ci68'][0]:.3g}, {q['ci68'][1]:.3g}]")
-        lines.append(f"| [{name}]({name}.md) | " + " | ".join(cells)
-                     + f" | {s['diagnostics']['converged']} | {len(post.modes)} |")
+        lines.append(
+            f"| [{name}]({name}.md) | "
+            + " | ".join(cells)
+            + f" | {s['diagnostics']['converged']} | {len(post.modes)} |"
+        )
     return write_text(out / "index.md", "\n".join(lines) + "\n", overwrite=overwrite)

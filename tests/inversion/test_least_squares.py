@@ -1,14 +1,21 @@
-"""Batched DOLP least squares: exact recovery, agreement with the per-pixel baseline, masking, Laplace errors."""
+"""Batched DOLP least squares: exact recovery, agreement with the per-pixel baseline, masking,
+Laplace errors."""
 
 import numpy as np
 import pytest
 
 from scatterlab.inversion import fit_dolp, fit_dolp_per_pixel, model_dolp
 
-# specular 30-60 deg (Ch. VII) plus an off-specular sweep at theta_i = 45 deg, which determines sigma (Fig. 58)
+# specular 30-60 deg (Ch. VII) plus an off-specular sweep at theta_i = 45 deg, which determines
+# sigma (Fig. 58)
 TI = np.radians(np.r_[30, 35, 40, 45, 50, 55, 60, 45, 45, 45, 45])
 TR = np.radians(np.r_[30, 35, 40, 45, 50, 55, 60, 20, 30, 60, 70])
-TRUTH = [(1.39, 0.34, 0.3), (1.44, 16.0, 0.2), (3.6, 5.88, 0.3), (1.5, 0.0, 0.4)]  # paint, Al, Fe, glass
+TRUTH = [
+    (1.39, 0.34, 0.3),
+    (1.44, 16.0, 0.2),
+    (3.6, 5.88, 0.3),
+    (1.5, 0.0, 0.4),
+]  # paint, Al, Fe, glass
 
 
 def test_noise_free_recovery_to_1e_6_and_batched_equals_per_pixel():
@@ -26,7 +33,9 @@ def test_noise_free_recovery_to_1e_6_and_batched_equals_per_pixel():
 
 
 def test_known_sigma_and_batch_shape():
-    y = model_dolp(np.array([[1.39, 3.6]]), np.array([[0.34, 5.88]]), 0.3, TI[:7], TR[:7])  # specular only
+    y = model_dolp(
+        np.array([[1.39, 3.6]]), np.array([[0.34, 5.88]]), 0.3, TI[:7], TR[:7]
+    )  # specular only
     fit = fit_dolp(y, TI[:7], TR[:7], sigma=0.3)
     assert fit.n.shape == (1, 2)
     np.testing.assert_allclose(fit.n, [[1.39, 3.6]], atol=1e-6)
@@ -37,7 +46,7 @@ def test_known_sigma_and_batch_shape():
 def test_nan_measurements_are_masked_and_underdetermined_pixels_reported():
     y = np.stack([model_dolp(1.39, 0.34, 0.3, TI, TR)] * 3)
     y[1, [0, 4]] = np.nan  # two missing angles: still fitted
-    y[2, 2:] = np.nan      # two measurements left for three unknowns: not fitted
+    y[2, 2:] = np.nan  # two measurements left for three unknowns: not fitted
     fit = fit_dolp(y, TI, TR)
     assert fit.valid.tolist() == [True, True, False]
     np.testing.assert_allclose(fit.n[:2], 1.39, atol=1e-6)
@@ -45,9 +54,13 @@ def test_nan_measurements_are_masked_and_underdetermined_pixels_reported():
 
 
 def test_laplace_errors_match_monte_carlo_scatter_where_the_posterior_is_gaussian():
-    """Iron with DOLP noise 1e-4 (a well-identified, Gaussian regime): the Laplace standard errors agree with
-    the scatter of 150 noisy fits within 20 % (the sample standard deviation of 150 draws is known to ~6 %).
-    At noise 5e-3 the (n, kappa) valley of metals makes the errors non-Gaussian -- posterior sampling's job."""
+    """Iron with DOLP noise 1e-4 (a well-identified, Gaussian regime): the Laplace standard errors
+    agree with
+    the scatter of 150 noisy fits within 20 % (the sample standard deviation of 150 draws is known
+    to ~6 %).
+    At noise 5e-3 the (n, kappa) valley of metals makes the errors non-Gaussian -- posterior
+    sampling's job.
+    """
     rng = np.random.default_rng(5)
     clean = model_dolp(3.6, 5.88, 0.3, TI, TR)
     y = clean + 1e-4 * rng.standard_normal((150, TI.size))

@@ -5,7 +5,14 @@ import warnings
 import numpy as np
 import pytest
 
-from scatterlab.inversion import ConvergenceWarning, crlb, fit_dolp, model_dolp, sample_posterior, thilak_two_step
+from scatterlab.inversion import (
+    ConvergenceWarning,
+    crlb,
+    fit_dolp,
+    model_dolp,
+    sample_posterior,
+    thilak_two_step,
+)
 from scatterlab.inversion.thilak import thilak_dop
 from scatterlab.pbrdf.dolp import dolp_smooth_facet
 
@@ -14,8 +21,12 @@ COPPER = (0.314, 3.544)
 
 def test_eq115_equals_the_fresnel_dop_of_smooth_facets():
     beta = np.radians(np.linspace(1, 89, 50))
-    np.testing.assert_allclose(thilak_dop(*COPPER, beta), dolp_smooth_facet(COPPER[0] - 1j * COPPER[1], beta),
-                               rtol=1e-12, atol=1e-15)  # Eq. 115 rounds at 1e-16 absolute near beta = 0
+    np.testing.assert_allclose(
+        thilak_dop(*COPPER, beta),
+        dolp_smooth_facet(COPPER[0] - 1j * COPPER[1], beta),
+        rtol=1e-12,
+        atol=1e-15,
+    )  # Eq. 115 rounds at 1e-16 absolute near beta = 0
 
 
 def test_two_step_recovers_copper_and_theta_r_from_clean_data():
@@ -39,8 +50,11 @@ def test_crlb_matches_the_scatter_of_least_squares_in_the_gaussian_regime():
 
 
 def test_specular_only_sweeps_cannot_fix_sigma_but_off_specular_ones_can():
-    """Fig. 58's remark, for highly specular samples (sigma = 0.02-0.1, the reference's were below 1 deg): the
-    bound on sigma from specular angles 30-60 deg is far larger than from theta_r = 20-80 deg at theta_i = 45."""
+    """Fig. 58's remark, for highly specular samples (sigma = 0.02-0.1, the reference's were below 1
+    deg): the
+    bound on sigma from specular angles 30-60 deg is far larger than from theta_r = 20-80 deg at
+    theta_i = 45.
+    """
     spec = np.radians(np.r_[30, 35, 40, 45, 50, 55, 60])
     off_r = np.radians(np.r_[20, 30, 40, 50, 60, 70, 80])
     for n, k in ((3.6, 5.9), (1.39, 0.34)):
@@ -48,7 +62,8 @@ def test_specular_only_sweeps_cannot_fix_sigma_but_off_specular_ones_can():
             b_spec = crlb(n, k, s, spec, spec, 1e-3)
             b_off = crlb(n, k, s, np.full(7, np.radians(45)), off_r, 1e-3)
             assert b_spec[2] > 5 * b_off[2]
-    # glass: kappa = 0 is a stationary point of the DOLP, so kappa's bound is infinite, the others finite
+    # glass: kappa = 0 is a stationary point of the DOLP, so kappa's bound is infinite, the others
+    # finite
     b = crlb(1.5, 0.0, 0.3, np.full(7, np.radians(45)), off_r, 1e-3)
     assert np.isinf(b[1]) and np.all(np.isfinite(b[[0, 2]]))
     with pytest.raises(ValueError, match="noise"):
