@@ -40,12 +40,15 @@ __all__ = [
     "nearest_physical_mueller",
 ]
 
-_PAULI = np.array([
-    [[1, 0], [0, 1]],
-    [[1, 0], [0, -1]],
-    [[0, 1], [1, 0]],
-    [[0, -1j], [1j, 0]],
-], dtype=complex)
+_PAULI = np.array(
+    [
+        [[1, 0], [0, 1]],
+        [[1, 0], [0, -1]],
+        [[0, 1], [1, 0]],
+        [[0, -1j], [1j, 0]],
+    ],
+    dtype=complex,
+)
 # Basis B_ij = sigma_i (x) conj(sigma_j), shape (4, 4, 4, 4): [i, j, row, col].
 _BASIS = np.einsum("iab,jcd->ijacbd", _PAULI, _PAULI.conj()).reshape(4, 4, 4, 4)
 
@@ -76,22 +79,30 @@ def jones_to_mueller(J) -> np.ndarray:
 # Eq. 133, element by element: M[i][j] from |J_k|^2 (sq) and J_k J_l^* (pr) of a = T_ss, b = T_ps,
 # c = T_sp, d = T_pp.
 _ELEMENTS = (
-    (lambda q, p: 0.5 * (q("a") + q("b") + q("c") + q("d")),
-     lambda q, p: 0.5 * (q("a") - q("b") + q("c") - q("d")),
-     lambda q, p: p("ab").real + p("cd").real,
-     lambda q, p: p("ab").imag + p("cd").imag),
-    (lambda q, p: 0.5 * (q("a") + q("b") - q("c") - q("d")),
-     lambda q, p: 0.5 * (q("a") - q("b") - q("c") + q("d")),
-     lambda q, p: p("ab").real - p("cd").real,
-     lambda q, p: p("ab").imag - p("cd").imag),
-    (lambda q, p: p("ac").real + p("bd").real,
-     lambda q, p: p("ac").real - p("bd").real,
-     lambda q, p: p("ad").real + p("bc").real,
-     lambda q, p: p("ad").imag - p("bc").imag),
-    (lambda q, p: -p("ac").imag - p("bd").imag,
-     lambda q, p: p("bd").imag - p("ac").imag,
-     lambda q, p: -p("ad").imag - p("bc").imag,
-     lambda q, p: p("ad").real - p("bc").real),
+    (
+        lambda q, p: 0.5 * (q("a") + q("b") + q("c") + q("d")),
+        lambda q, p: 0.5 * (q("a") - q("b") + q("c") - q("d")),
+        lambda q, p: p("ab").real + p("cd").real,
+        lambda q, p: p("ab").imag + p("cd").imag,
+    ),
+    (
+        lambda q, p: 0.5 * (q("a") + q("b") - q("c") - q("d")),
+        lambda q, p: 0.5 * (q("a") - q("b") - q("c") + q("d")),
+        lambda q, p: p("ab").real - p("cd").real,
+        lambda q, p: p("ab").imag - p("cd").imag,
+    ),
+    (
+        lambda q, p: p("ac").real + p("bd").real,
+        lambda q, p: p("ac").real - p("bd").real,
+        lambda q, p: p("ad").real + p("bc").real,
+        lambda q, p: p("ad").imag - p("bc").imag,
+    ),
+    (
+        lambda q, p: -p("ac").imag - p("bd").imag,
+        lambda q, p: p("bd").imag - p("ac").imag,
+        lambda q, p: -p("ad").imag - p("bc").imag,
+        lambda q, p: p("ad").real - p("bc").real,
+    ),
 )
 
 
@@ -135,10 +146,13 @@ def mueller_from_jones_elements(a, b, c, d, *, shape: tuple[int, int] = (4, 4)) 
 
     rows, cols = shape
     out_shape = np.broadcast_shapes(*(np.shape(x) for x in J.values() if x is not None))
-    M = np.empty(out_shape + (rows * cols,))
+    diagonal = b is None or c is None
+    M = (np.zeros if diagonal else np.empty)(out_shape + (rows * cols,))
     for i in range(rows):
         for j in range(cols):
-            M[..., i * cols + j] = _ELEMENTS[i][j](q, p)
+            value = _ELEMENTS[i][j](q, p)
+            if not diagonal or np.ndim(value) or value != 0:  # diagonal J: 8 elements stay 0
+                M[..., i * cols + j] = value
     return M.reshape(out_shape + (rows, cols))
 
 
@@ -220,8 +234,9 @@ def linear_retarder(retardance, fast_axis=0.0) -> np.ndarray:
     -------
     M : ndarray, shape ``(..., 4, 4)``.
     """
-    d, t = broadcast(retardance=as_finite(retardance, "retardance"),
-                     fast_axis=as_finite(fast_axis, "fast_axis"))
+    d, t = broadcast(
+        retardance=as_finite(retardance, "retardance"), fast_axis=as_finite(fast_axis, "fast_axis")
+    )
     M = np.zeros(d.shape + (4, 4))
     M[..., 0, 0] = M[..., 1, 1] = 1
     M[..., 2, 2] = M[..., 3, 3] = np.cos(d)
