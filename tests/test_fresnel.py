@@ -217,7 +217,7 @@ TINY_ETAS = [-2.207e-8j, 1e-8 + 0j, 3e-6 - 2e-6j, 1e-4 - 1e-5j, 5e-3 + 0j, 0.0 -
 @pytest.mark.parametrize("eta", TINY_ETAS)
 @pytest.mark.parametrize("theta", [0.0, 5.825e-9, 1e-5, 0.3, 1.2, np.radians(89.99), np.pi / 2])
 def test_tiny_index_matches_50_digit_reference(eta, theta):
-    """|eta| < 0.01: (n^2 - 1) - kappa^2 + cos^2 cancelled (R = 1.188 at eta = -2.2e-8j, theta = 5.8e-9)."""
+    """|eta| < 0.01: (n^2 - 1) - kappa^2 + cos^2 cancelled (R = 1.188 at eta = -2.2e-8j)."""
     rs, rp = fresnel.coefficients(eta, theta)
     rs_ref, rp_ref = mp_coefficients(complex(eta), theta)
     assert abs(rs - rs_ref) <= 1e-13 * abs(rs_ref) + 1e-15
@@ -276,13 +276,14 @@ def test_zero_real_part_is_a_lossless_plasma():
 def test_reduced_coefficients_times_one_minus_eta2_are_the_coefficients(eta):
     theta = np.linspace(0, 1.5, 11)
     red = fresnel.reduced_coefficients(eta, np.cos(theta), np.sin(theta) ** 2)
-    for r, r_ref in zip((red.rs, red.rp), map(np.array, zip(*(mp_coefficients(complex(eta), t) for t in theta)))):
+    refs = map(np.array, zip(*(mp_coefficients(complex(eta), t) for t in theta)))
+    for r, r_ref in zip((red.rs, red.rp), refs):
         np.testing.assert_allclose((1 - eta**2) * r, r_ref, rtol=1e-12, atol=1e-15)
     e = mpmath.mpc(complex(eta).real, complex(eta).imag)
     np.testing.assert_allclose(red.scale, float(abs(1 - e**2) ** 2), rtol=1e-14)
 
 
-@pytest.mark.parametrize("eta", [3.23 - 4.35j, 1.5 - 0.01j, 0.314 - 3.544j, 1.0 - 0.2j, 0.6 - 1e-3j])
+@pytest.mark.parametrize("eta", [3.23 - 4.35j, 1.5 - 0.01j, 0.314 - 3.544j, 1 - 0.2j, 0.6 - 1e-3j])
 def test_smooth_dolp_gradient_equals_central_differences(eta):
     theta = np.radians([5, 30, 55, 80, 89])
     P, g = fresnel.smooth_dolp(eta, np.cos(theta), gradient=True)
@@ -297,7 +298,8 @@ def test_smooth_dolp_gradient_equals_central_differences(eta):
 
 def test_smooth_dolp_is_continuous_at_eta_one_and_zero_for_a_conductor():
     c = np.cos(np.radians([10, 40, 70]))
-    np.testing.assert_allclose(fresnel.smooth_dolp(1.0, c)[0], fresnel.smooth_dolp(1 + 1e-9, c)[0], rtol=1e-7)
+    at_one, near_one = fresnel.smooth_dolp(1.0, c)[0], fresnel.smooth_dolp(1 + 1e-9, c)[0]
+    np.testing.assert_allclose(at_one, near_one, rtol=1e-7)
     assert np.all(fresnel.smooth_dolp("pec", c)[0] == 0)
     with pytest.raises(ValueError, match="cos_theta"):
         fresnel.smooth_dolp(1.5, 1.2)

@@ -1,4 +1,4 @@
-"""Property-based tests (hypothesis) over the public physics entries of fresnel, polarization and pbrdf.
+"""Property-based tests (hypothesis) over the public physics of fresnel, polarization and pbrdf.
 
 The extreme matrix of issue 20: theta from 0 to exactly 90 deg (and 89.99), sigma from 1e-3 to 1.5,
 kappa from 0 to 1e3, n below 1, |eta| from 1e-8 to 1e6 (all phases of a passive medium), the three
@@ -31,7 +31,7 @@ diffuses = st.sampled_from(["hyde", "reciprocal", "none"])
 
 @st.composite
 def etas(draw):
-    """n in [0, 20] with kappa in {0} or [0, 1e3]; or |eta| log-uniform in [1e-8, 1e6], any passive phase."""
+    """n in [0, 20], kappa in {0} or [0, 1e3]; or |eta| log-uniform in [1e-8, 1e6], any passive phase."""
     if draw(st.booleans()):
         n = draw(st.floats(0.0, 20.0))
         kappa = draw(st.one_of(st.just(0.0), st.floats(0.0, 1e3)))
@@ -43,8 +43,8 @@ def etas(draw):
     return complex(mag * np.cos(phase), min(mag * np.sin(phase), 0.0))
 
 
-PBRDF_CASES = dict(eta=etas(), theta_i=polar_angles, theta_r=polar_angles, phi=azimuths, sigma=sigmas,
-                   shadowing=shadowings)
+PBRDF_CASES = dict(eta=etas(), theta_i=polar_angles, theta_r=polar_angles, phi=azimuths,
+                   sigma=sigmas, shadowing=shadowings)
 
 
 @SETTINGS
@@ -107,7 +107,7 @@ def test_backscatter_reciprocity_and_symmetry(eta, theta, sigma, shadowing):
 @settings(max_examples=60, deadline=None, derandomize=True)
 @given(theta=polar_angles, sigma=sigmas, shadowing=st.sampled_from(["torrance-sparrow", "smith"]))
 def test_shadowed_dhr_is_an_albedo(theta, sigma, shadowing):
-    """Energy: the specular DHR of a shadowed PEC surface is in [0, 1]; with the Hyde diffuse term the
+    """Energy: the specular DHR of a shadowed PEC surface is in [0, 1]; with the Hyde diffuse term,
     PEC total is exactly 1 (int D cos = 1 - rho)."""
     m = Model(sigma, shadowing=shadowing)
     rho = m.dhr_pec(theta)

@@ -23,8 +23,9 @@ PARAMS = np.array(
 
 
 def pbrdf_dolp(p, phi):
-    """Model.dolp; at eta = 1 exactly no light is reflected and it is NaN, while the forward model is
-    the continuous extension there (a function of the parameters): compare with the next float above 1."""
+    """Model.dolp; at eta = 1 exactly no light is reflected and it is NaN, while the forward model
+    is the continuous extension there (a function of the parameters): compare with the next float
+    above 1."""
     eta = p[:, 0] - 1j * p[:, 1]
     eta = np.where(eta == 1, np.nextafter(1.0, 2.0), eta)
     return Model(p[:, 2:3]).dolp(eta[:, None], TI, TR, phi)
@@ -105,7 +106,7 @@ def test_thilak_dop_wrapper_equals_the_printed_eq115():
 
 
 def test_facet_factor_out_of_plane_is_the_facet_dolp():
-    """Out of the plane the facet factor is the facet's own DOLP, finite where the lobe underflows."""
+    """Out of the plane the facet factor is the facet's own DOLP, finite where the lobe vanishes."""
     from scatterlab.pbrdf import facet_dolp
 
     fwd = DolpForward(TI, TR, np.r_[np.pi, 3.0, 2.8, np.pi, 2.5, 2.0, 3.1])

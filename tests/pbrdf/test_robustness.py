@@ -1,4 +1,4 @@
-"""Issue 20 reproducers in the pBRDF (each kept as a test) and the shadowing strategies of issue 18."""
+"""Issue 20 reproducers in the pBRDF (each kept as a test) and the shadowing strategies (issue 18)."""
 
 import numpy as np
 import pytest
@@ -52,7 +52,7 @@ def test_single_grazing_direction_is_the_continuous_limit(shadowing):
 
 
 def test_unshadowed_grazing_divergence_is_defined_as_zero():
-    """Priest-Germer diverges like 1/cos(theta) at a grazing direction; the value there is 0 (finite)."""
+    """Priest-Germer diverges like 1/cos(theta) at a grazing direction; the value there is 0."""
     m = Model(0.3, shadowing="none", diffuse="none")
     assert m.mueller(ETA, 0.5, HALF_PI, np.pi)[0, 0] == 0
     assert np.isfinite(m.mueller(ETA, 0.5, HALF_PI - 1e-7, np.pi)[0, 0])
@@ -60,7 +60,7 @@ def test_unshadowed_grazing_divergence_is_defined_as_zero():
 
 # ---------------------------------------------------------------- the unshadowed DHR table
 def test_unshadowed_table_reproducer_and_energy():
-    """The table for shadowing="none" was off by 3e-3 at small sigma (0.99692 where quadrature gives 1),
+    """The table for shadowing="none" was off by 3e-3 at small sigma (0.99692, quadrature: 1),
     so the Hyde diffuse term created energy (PEC total 1.0031)."""
     m = Model(1e-3, shadowing="none")
     th = np.radians(73.38)
@@ -74,7 +74,7 @@ def test_unshadowed_table_reproducer_and_energy():
 @pytest.mark.parametrize("shadowing", ["none", "smith"])
 def test_table_error_against_quadrature_at_random_points(shadowing):
     """Stated table error (<= 1e-6 absolute, relative where the unshadowed rho > 1) at 150 random
-    points, against the quadrature with 1.5x its default nodes (an independent convergence level)."""
+    points, against the quadrature with 1.5x its default nodes (an independent convergence)."""
     table = dhr_table(shadowing)
     assert table.max_error <= 2e-6
     rng = np.random.default_rng(20)
@@ -95,9 +95,9 @@ def test_small_sigma_unshadowed_table_dense_sweep():
         np.testing.assert_allclose(dhr_table("none")(th, sigma), ref, atol=1e-6)
 
 
-# ---------------------------------------------------------------- Smith: tabulated, every option works
+# ------------------------------------------------------- Smith: tabulated, every option works
 def test_smith_reciprocal_works_at_construction_and_conserves_energy(hemisphere_integral):
-    """Model(0.3, shadowing="smith", diffuse="reciprocal") failed on first use; now it is built on the
+    """Model(0.3, shadowing="smith", diffuse="reciprocal") failed on first use; now it uses the
     Smith table. Its PEC total DHR is 1 (independent cubature)."""
     m = Model(0.3, shadowing="smith", diffuse="reciprocal")
     ti = np.radians(40)
@@ -154,7 +154,7 @@ def test_strategy_objects_and_names_are_interchangeable():
 
 
 def test_a_user_shadowing_function_plugs_into_model_and_dhr():
-    """A new Shadowing (G = 1 scaled by 1/2, a toy) works in the pBRDF and the DHR quadrature alike."""
+    """A new Shadowing (G = 1/2, a toy) works in the pBRDF and the DHR quadrature alike."""
     half = Shadowing(
         "half",
         g_over_cos=lambda geo, slopes: 0.5 / (geo.cos_theta_i * geo.cos_theta_r),
