@@ -169,3 +169,16 @@ def test_a_user_shadowing_function_plugs_into_model_and_dhr():
     np.testing.assert_allclose(
         dhr_beckmann(ti, 0.3, half), 0.5 * dhr_beckmann(ti, 0.3, "none"), rtol=1e-12
     )
+
+
+@pytest.mark.parametrize("eta", [-2.207e-8j, 1e-6 - 1e-6j, 5e-5 + 0j])
+def test_tiny_index_reciprocity_at_exact_backscatter(eta):
+    """|eta| < 1e-4 broke reciprocity at exact backscatter (sin^2(beta) from 1 - cos^2 was 2e-16,
+    comparable to eta^2): F = Q F^T Q there, and r_p = -r_s makes F00 = F11 = -F22 = -F33."""
+    m = Model(0.3, diffuse="none")
+    th = np.radians([0.0, 20.0, 60.0, 89.0])
+    F = m.mueller(eta, th, th, 0.0)
+    Q = np.diag([1.0, 1, 1, -1])
+    np.testing.assert_allclose(F, Q @ np.swapaxes(F, -1, -2) @ Q, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(np.diagonal(F, axis1=-2, axis2=-1),
+                               F[:, :1, 0] * np.array([1.0, 1, -1, -1]), rtol=1e-12)
