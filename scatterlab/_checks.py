@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "ETA_MIN",
+    "ETA_MAX",
     "as_index",
     "as_angle",
     "as_positive",
@@ -29,12 +31,19 @@ def as_finite(value, name: str, *, dtype=float) -> np.ndarray:
     return arr
 
 
+ETA_MIN, ETA_MAX = 1e-50, 1e50
+"""Allowed range of ``|eta|``: inside it every Fresnel and pBRDF formula is evaluated without
+overflow or underflow of its intermediate powers (up to ``|eta|^4``) and is tested (see
+:mod:`scatterlab.fresnel`)."""
+
+
 def as_index(eta, name: str = "eta") -> np.ndarray:
     """Validate a complex index of refraction ``eta = n - 1j*kappa``.
 
     Allowed: finite, ``n >= 0``, ``kappa >= 0`` (imaginary part <= 0) and
-    ``eta != 0``. A positive imaginary part is the other sign convention and is
-    rejected rather than conjugated silently.
+    ``1e-50 <= |eta| <= 1e50`` (:data:`ETA_MIN`, :data:`ETA_MAX`). ``n = 0`` with ``kappa > 0`` is a
+    lossless medium below its plasma frequency and is allowed; ``eta = 0`` is not. A positive
+    imaginary part is the other sign convention and is rejected rather than conjugated silently.
     """
     arr = as_finite(eta, name, dtype=complex)
     if np.any(arr.imag > 0):
@@ -45,8 +54,14 @@ def as_index(eta, name: str = "eta") -> np.ndarray:
         )
     if np.any(arr.real < 0):
         raise ValueError(f"{name} must have a non-negative real part n >= 0")
-    if np.any(arr == 0):
-        raise ValueError(f"{name} must be non-zero")
+    mag = np.abs(arr)
+    bad = (mag < ETA_MIN) | (mag > ETA_MAX)
+    if np.any(bad):
+        worst = complex(arr[bad].flat[0])
+        raise ValueError(
+            f"{name} must satisfy {ETA_MIN:g} <= |{name}| <= {ETA_MAX:g} (got {name} = {worst!r}); "
+            f"outside this range the Fresnel formulas overflow double precision"
+        )
     return arr
 
 

@@ -30,11 +30,20 @@ divide zero by zero at grazing incidence. Here they are rewritten exactly as
    r_s = \frac{(1-\eta)(1+\eta)}{(\cos\theta + u)^2},\qquad
    r_p = \frac{(\eta-1)(\eta+1)\,(\eta^2\cos^2\theta - \sin^2\theta)}{(\eta^2\cos\theta + u)^2},
 
-(multiply numerator and denominator by the conjugate-like factor) and
-:math:`A, B` are computed without cancellation from :math:`AB = n\kappa`. The
-results are finite for every physical input: :math:`\kappa` from 0 to 1e3,
-:math:`n` from 0.01 to 20, :math:`\eta \to 1`, :math:`\theta` from 0 to exactly
-:math:`\pi/2`.
+(multiply numerator and denominator by the conjugate-like factor); the factors after
+:math:`(1-\eta^2)` are the reduced coefficients of :func:`reduced_coefficients`, the one kernel
+every reflection formula of the package uses. :math:`A, B` are computed without cancellation
+from :math:`AB = n\kappa`, with :math:`D = n^2 - \kappa^2 - \sin^2\theta` formed in whichever
+exact form is accurate (:math:`(n^2 - 1) - \kappa^2 + \cos^2\theta` near :math:`\eta = 1`, the
+plain form for :math:`|\eta| \ll 1`).
+
+Valid range. ``n >= 0`` (``n = 0`` with ``kappa > 0`` is a lossless plasma below its plasma
+frequency: total reflection) and ``1e-50 <= |eta| <= 1e50``; outside it a :class:`ValueError`
+names ``eta`` and the range (beyond it the powers up to :math:`|\eta|^4` in the formulas would
+overflow or underflow). Inside it the results are finite, :math:`R_s, R_p \in [0, 1]`, and
+tested against 50-digit references from :math:`|\eta| = 10^{-8}` to :math:`10^{6}`, and
+against the limits (total reflection as :math:`\eta \to 0`, a perfect conductor as
+:math:`|\eta| \to \infty`) at the ends; :math:`\theta` from 0 to exactly :math:`\pi/2`.
 
 References
 ----------
@@ -43,15 +52,21 @@ Reference text (AFIT/DEE/ENG/10-12), Eqs. 28, 45-55, 85.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from scipy import optimize
 
 from scatterlab._checks import as_angle, as_finite, as_index, as_positive, broadcast
+from scatterlab.polarization.mueller import mueller_from_jones_elements
 
 __all__ = [
     "complex_index",
     "index_from_permittivity",
     "refraction_term",
+    "ReducedFresnel",
+    "reduced_coefficients",
+    "smooth_dolp",
     "coefficients",
     "transmission_coefficients",
     "reflectances",
@@ -124,14 +139,19 @@ def index_from_permittivity(eps_r, conductivity=0.0, wavelength=None) -> np.ndar
     return as_index(n - 1j * kappa, "eta (from eps_r, conductivity)")
 
 
-def _refraction_term(eta: np.ndarray, cos2: np.ndarray) -> np.ndarray:
-    """``A - jB = sqrt(eta^2 - sin^2) = sqrt((eta^2 - 1) + cos^2)``, ``A, B >= 0``, without cancellation.
+def _normal_term(eta: np.ndarray, cos2: np.ndarray, sin2: np.ndarray) -> np.ndarray:
+    """``A - jB = sqrt(eta^2 - sin^2)``, ``A, B >= 0``, without cancellation (unchecked).
 
-    ``D = (n - 1)(n + 1) - kappa^2 + cos^2`` keeps full relative accuracy as eta -> 1
-    at grazing incidence, where ``n^2 - sin^2`` would cancel.
+    ``D = Re(eta^2) - sin^2 = n^2 - kappa^2 - sin^2`` is formed in whichever of two exact forms has
+    the smaller rounding error: ``(n - 1)(n + 1) - kappa^2 + cos^2`` when ``eta -> 1`` near grazing
+    incidence (where ``n^2 - sin^2`` cancels), ``n^2 - kappa^2 - sin^2`` otherwise, in particular
+    for ``|eta| << 1``, where ``(n^2 - 1) + cos^2`` cancels (issue 20: it gave R = 1.19 at
+    ``eta = -2.2e-8j``). Then ``A, B`` follow from ``AB = n kappa`` (errata to Eq. 49).
     """
     n, kappa = eta.real, -eta.imag
-    d = (n - 1) * (n + 1) - kappa * kappa + cos2
+    kk = kappa * kappa
+    near_one = np.abs((n - 1) * (n + 1)) + cos2 < n * n + sin2
+    d = np.where(near_one, (n - 1) * (n + 1) - kk + cos2, n * n - kk - sin2)
     nk = n * kappa
     w = np.hypot(d, 2 * nk)
     big = np.sqrt((w + np.abs(d)) / 2)
@@ -162,23 +182,170 @@ def refraction_term(eta, theta) -> np.ndarray:
     eta = as_index(eta)
     theta = as_angle(theta)
     eta, theta = broadcast(eta=eta, theta=theta)
-    return _refraction_term(eta, np.cos(theta) ** 2)
+    return _normal_term(eta, np.cos(theta) ** 2, np.sin(theta) ** 2)
+
+
+class ReducedFresnel(NamedTuple):
+    """Reduced Fresnel coefficients and their eta-derivatives, see :func:`reduced_coefficients`."""
+
+    rs: np.ndarray
+    rp: np.ndarray
+    scale: np.ndarray
+    drs: np.ndarray | None = None
+    drp: np.ndarray | None = None
+
+
+def reduced_coefficients(
+    eta,
+    cos_theta,
+    sin2_theta=None,
+    *,
+    derivative: bool = False,
+    normalize: bool = False,
+    checked: bool = False,
+) -> ReducedFresnel:
+    r"""Reduced Fresnel coefficients :math:`r' = r/(1-\eta^2)`, the kernel of reflection formulas.
+
+    .. math::
+
+       r_s' = \frac{1}{(\cos\theta + u)^2},\qquad
+       r_p' = -\frac{\eta^2\cos^2\theta - \sin^2\theta}{(\eta^2\cos\theta + u)^2},\qquad
+       u = \sqrt{\eta^2 - \sin^2\theta},
+
+    exact rewritings of Eq. 45 (module docstring) with :math:`r = (1-\eta^2)\,r'`. They are
+    finite at :math:`\eta = 1` (except at exact grazing incidence), so ratios such as the DOLP are
+    the continuous extension there, and holomorphic in :math:`\eta`, so
+    :math:`\partial|r'|^2/\partial n = 2\,\mathrm{Re}(r'^* r'_\eta)` and
+    :math:`\partial|r'|^2/\partial\kappa = 2\,\mathrm{Im}(r'^* r'_\eta)`.
+
+    Parameters
+    ----------
+    eta : array_like of complex, or ``"pec"``
+        Complex index ``n - 1j*kappa``; ``"pec"`` gives ``rs' = -1, rp' = 1, scale = 1``.
+    cos_theta : array_like
+        Cosine of the angle of incidence, in ``[0, 1]``.
+    sin2_theta : array_like, optional
+        :math:`\sin^2\theta`; pass it when known to full relative accuracy (small angles with
+        ``|eta| << 1``). Default ``(1 - cos)(1 + cos)``.
+    derivative : bool
+        Also return :math:`dr_s'/d\eta` and :math:`dr_p'/d\eta` (kept finite at the branch point
+        :math:`u = 0`, where :math:`du/d\eta = \eta/u` is evaluated at ``|u| = 1e-12``).
+    normalize : bool
+        Where a denominator is below 1e-60 (``eta -> 1`` at grazing incidence, where the reduced
+        factors grow like ``1/|1 - eta^2|`` and their squares overflow), divide ``rs, rp`` (and
+        ``drs, drp``) by ``m = max(|rs|, |rp|)`` and multiply ``scale`` by ``m^2``: the same
+        reflectances, every factor bounded. Elsewhere the values are not touched.
+    checked : bool
+        Skip validation (inputs already validated and broadcast).
+
+    Returns
+    -------
+    ReducedFresnel
+        ``(rs, rp, scale, drs, drp)`` of the broadcast shape; ``scale = |1 - eta^2|^2`` (times
+        ``m^2`` when normalized) so that ``R_s = scale |rs|^2``; ``drs, drp`` are None unless
+        ``derivative``.
+    """
+    c = np.asarray(cos_theta, float)
+    if isinstance(eta, str):
+        if eta.lower() != "pec":
+            raise ValueError(f"eta must be a complex index n - 1j*kappa or 'pec', got {eta!r}")
+        one = np.ones_like(c)
+        zero = np.zeros_like(c) + 0j if derivative else None
+        return ReducedFresnel(-one + 0j, one + 0j, one, zero, zero)
+    if not checked:
+        eta = as_index(eta)
+        c = as_finite(c, "cos_theta")
+        if np.any((c < 0) | (c > 1)):
+            raise ValueError("cos_theta must be in [0, 1]")
+        eta, c = broadcast(eta=eta, cos_theta=c)
+    cos2 = c * c
+    s2 = (1 - c) * (1 + c) if sin2_theta is None else np.asarray(sin2_theta, float)
+    u = _normal_term(eta, cos2, s2)
+    eta2 = eta * eta
+    ds = c + u
+    dp = eta2 * c + u
+    num_p = eta2 * cos2 - s2
+    with np.errstate(divide="ignore", invalid="ignore"):  # eta = 1 at exact grazing: no interface
+        rs = 1.0 / (ds * ds)
+        rp = -num_p / (dp * dp)
+    f = (1 - eta) * (1 + eta)
+    drs, drp = _reduced_derivatives(eta, c, u, ds, dp, num_p) if derivative else (None, None)
+    if normalize and _tiny(ds, dp):
+        m = np.maximum(np.abs(rs), np.abs(rp))
+        m = np.where(np.isfinite(m) & (m > 0), m, 1.0)  # eta = 1 at exact grazing: left as is
+        with np.errstate(invalid="ignore"):
+            rs, rp = rs / m, rp / m
+            if derivative:
+                drs, drp = drs / m, drp / m
+        f = f * m
+    return ReducedFresnel(rs, rp, f.real**2 + f.imag**2, drs, drp)
+
+
+def _tiny(*denominators) -> bool:
+    """True if a denominator is small enough for the squared reduced factors to overflow."""
+    return any(np.any(np.abs(x.real) + np.abs(x.imag) < 1e-60) for x in denominators)
+
+
+def _reduced_derivatives(eta, c, u, ds, dp, num_p):
+    """``d rs'/d eta``, ``d rp'/d eta`` (``du/d eta = eta/u``, evaluated at ``|u| >= 1e-12``)."""
+    du = eta / np.where(np.abs(u) < 1e-12, 1e-12, u)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        drs = -2.0 * du / (ds * ds * ds)
+        drp = -(2 * eta * c * c * dp - 2 * num_p * (2 * eta * c + du)) / (dp * dp * dp)
+    return drs, drp
+
+
+def smooth_dolp(eta, cos_theta, sin2_theta=None, *, gradient: bool = False, checked: bool = False):
+    r"""DOLP of unpolarized light reflected by a smooth surface, :math:`(R_s - R_p)/(R_s + R_p)`.
+
+    The facet DOLP of the pBRDF (Eq. 114 at the facet angle :math:`\beta`), computed from the
+    reduced coefficients of :func:`reduced_coefficients`, so it is the continuous extension at
+    :math:`\eta = 1` (a formula of eta: :meth:`scatterlab.pbrdf.Model.dolp`, a measurement, is NaN
+    where no light is reflected). Thilak et al.'s Eq. 115 is the same function
+    (:func:`scatterlab.inversion.thilak.thilak_dop`, tested equal).
+
+    Parameters
+    ----------
+    eta : array_like of complex, or ``"pec"``
+    cos_theta, sin2_theta : array_like
+        As in :func:`reduced_coefficients` (angle of incidence on the reflecting surface).
+    gradient : bool
+        Also return the derivatives in ``(n, kappa)``.
+    checked : bool
+        Skip validation.
+
+    Returns
+    -------
+    dolp : ndarray in ``[0, 1]`` (up to rounding), broadcast shape.
+    grad : ndarray ``(..., 2)``, d/dn and d/dkappa, or None.
+    """
+    r = reduced_coefficients(
+        eta, cos_theta, sin2_theta, derivative=gradient, normalize=True, checked=checked
+    )
+    a = r.rs.real**2 + r.rs.imag**2
+    b = r.rp.real**2 + r.rp.imag**2
+    tot = a + b
+    # exact grazing: R_s = R_p = 1 for every medium (and the limit at eta = 1 as well)
+    grazing = np.asarray(cos_theta) == 0
+    with np.errstate(invalid="ignore"):
+        P = np.where(grazing, 0.0, (a - b) / tot)
+    if not gradient:
+        return P, None
+    gs, gp = r.rs.conj() * r.drs, r.rp.conj() * r.drp
+    grad = np.empty(P.shape + (2,))
+    tot2 = tot * tot
+    for k, part in enumerate((np.real, np.imag)):
+        grad[..., k] = np.where(grazing, 0.0, 4 * (b * part(gs) - a * part(gp)) / tot2)
+    return P, grad
 
 
 def _coefficients(eta: np.ndarray, theta: np.ndarray):
-    """Unchecked rs, rp (stable forms, see module docstring)."""
-    c = np.cos(theta)
-    s2 = np.sin(theta) ** 2
-    u = _refraction_term(eta, c * c)
-    one_minus_eta2 = (1 - eta) * (1 + eta)
-    eta2 = eta * eta
-    num_s = one_minus_eta2
-    den_s = (c + u) ** 2
-    num_p = -one_minus_eta2 * (eta2 * c * c - s2)
-    den_p = (eta2 * c + u) ** 2
-    # eta == 1 exactly at grazing incidence is 0/0; there is no interface: r = 0.
-    rs = np.divide(num_s, den_s, out=np.zeros_like(num_s), where=num_s != 0)
-    rp = np.divide(num_p, den_p, out=np.zeros_like(num_p), where=num_p != 0)
+    """Unchecked rs, rp: ``(1 - eta^2)`` times the reduced coefficients."""
+    red = reduced_coefficients(eta, np.cos(theta), np.sin(theta) ** 2, checked=True)
+    f = (1 - eta) * (1 + eta)
+    # eta == 1 exactly at grazing incidence is 0 * inf; there is no interface: r = 0.
+    rs = np.where(f == 0, 0.0, f * np.where(f == 0, 0.0, red.rs))
+    rp = np.where(f == 0, 0.0, f * np.where(f == 0, 0.0, red.rp))
     return rs, rp
 
 
@@ -232,7 +399,7 @@ def transmission_coefficients(eta, theta):
     theta = as_angle(theta)
     eta, theta = broadcast(eta=eta, theta=theta)
     c = np.cos(theta)
-    u = _refraction_term(eta, c * c)
+    u = _normal_term(eta, c * c, np.sin(theta) ** 2)
     return 2 * c / (c + u), 2 * eta * c / (eta * eta * c + u)
 
 
@@ -287,7 +454,7 @@ def transmittances(eta, theta):
     theta = as_angle(theta)
     eta, theta = broadcast(eta=eta, theta=theta)
     c = np.cos(theta)
-    u = _refraction_term(eta, c * c)
+    u = _normal_term(eta, c * c, np.sin(theta) ** 2)
     ts = 2 / (c + u)  # t_s / cos(theta)
     tp = 2 * eta / (eta * eta * c + u)  # t_p / cos(theta)
     ts2 = ts.real**2 + ts.imag**2
@@ -325,15 +492,7 @@ def mueller_matrix(eta, theta) -> np.ndarray:
     theta = as_angle(theta)
     eta, theta = broadcast(eta=eta, theta=theta)
     rs, rp = _coefficients(eta, theta)
-    Rs, Rp = np.abs(rs) ** 2, np.abs(rp) ** 2
-    x = rs * np.conj(rp)
-    M = np.zeros(eta.shape + (4, 4))
-    M[..., 0, 0] = M[..., 1, 1] = (Rs + Rp) / 2
-    M[..., 0, 1] = M[..., 1, 0] = (Rs - Rp) / 2
-    M[..., 2, 2] = M[..., 3, 3] = x.real
-    M[..., 2, 3] = x.imag
-    M[..., 3, 2] = -x.imag
-    return M
+    return mueller_from_jones_elements(rs, None, None, rp)
 
 
 def brewster_angle(n) -> np.ndarray:
@@ -394,7 +553,8 @@ def pseudo_brewster_angle(eta, *, xtol: float = 1e-12) -> np.ndarray:
         def abs_rp(t, e_arr=e_arr):
             return float(np.abs(_coefficients(e_arr, np.asarray(t))[1]))
 
-        res = optimize.minimize_scalar(abs_rp, bounds=(0.0, np.pi / 2), method="bounded",
-                                       options={"xatol": xtol})
+        res = optimize.minimize_scalar(
+            abs_rp, bounds=(0.0, np.pi / 2), method="bounded", options={"xatol": xtol}
+        )
         out[idx] = res.x
     return out

@@ -208,3 +208,98 @@ def test_property_bounds_order_and_realizability(n, kappa, theta):
 def test_bad_input_raises_value_error_naming_argument(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+# ---------------------------------------------------------------- issue 20: the valid |eta| range
+TINY_ETAS = [-2.207e-8j, 1e-8 + 0j, 3e-6 - 2e-6j, 1e-4 - 1e-5j, 5e-3 + 0j, 0.0 - 0.009j]
+
+
+@pytest.mark.parametrize("eta", TINY_ETAS)
+@pytest.mark.parametrize("theta", [0.0, 5.825e-9, 1e-5, 0.3, 1.2, np.radians(89.99), np.pi / 2])
+def test_tiny_index_matches_50_digit_reference(eta, theta):
+    """|eta| < 0.01: (n^2 - 1) - kappa^2 + cos^2 cancelled (R = 1.188 at eta = -2.2e-8j)."""
+    rs, rp = fresnel.coefficients(eta, theta)
+    rs_ref, rp_ref = mp_coefficients(complex(eta), theta)
+    assert abs(rs - rs_ref) <= 1e-13 * abs(rs_ref) + 1e-15
+    assert abs(rp - rp_ref) <= 1e-12 * abs(rp_ref) + 1e-15
+    Rs, Rp = fresnel.reflectances(eta, theta)
+    assert Rs == pytest.approx(abs(rs_ref) ** 2, abs=1e-13)
+    assert Rp == pytest.approx(abs(rp_ref) ** 2, abs=1e-13)
+
+
+def test_issue20_tiny_index_reproducer_does_not_create_energy():
+    M = fresnel.mueller_matrix(-2.207e-8j, 5.825e-9)
+    assert M[0, 0] == pytest.approx(1.0, abs=1e-13)  # n = 0: a lossless plasma reflects everything
+    assert polarization.is_physical_mueller(M, atol=1e-12)
+
+
+@pytest.mark.parametrize("eta", [1e4 - 3e3j, 1e6 + 0j, 2e5 - 1e6j])
+@pytest.mark.parametrize("theta", [0.0, 0.7, 1.5, np.radians(89.99)])
+def test_huge_index_matches_50_digit_reference(eta, theta):
+    rs, rp = fresnel.coefficients(eta, theta)
+    rs_ref, rp_ref = mp_coefficients(complex(eta), theta)
+    assert abs(rs - rs_ref) <= 1e-13
+    assert abs(rp - rp_ref) <= 1e-12
+
+
+def test_ends_of_the_valid_range_are_the_physical_limits():
+    """|eta| = 1e50 is a perfect conductor (rs = -1, rp = 1), |eta| = 1e-50 reflects totally."""
+    theta = np.array([0.0, 0.4, 1.2, np.pi / 2])
+    rs, rp = fresnel.coefficients(9e49 - 4e49j, theta)
+    np.testing.assert_allclose(rs, -1, atol=1e-14)
+    np.testing.assert_allclose(rp, 1, atol=1e-14)
+    for eta in (1e-50 + 0j, -1e-50j, 1e-50 - 1e-50j):
+        Rs, Rp = fresnel.reflectances(eta, theta)
+        np.testing.assert_allclose(Rs, 1, atol=1e-14)
+        np.testing.assert_allclose(Rp, 1, atol=1e-14)
+        assert np.all(np.isfinite(fresnel.mueller_matrix(eta, theta)))
+
+
+@pytest.mark.parametrize("eta", [1e78 + 0j, 1e51 + 0j, 1e-51 + 0j, 0.0, 0j])
+def test_outside_the_valid_range_raises_naming_eta_and_the_range(eta):
+    with pytest.raises(ValueError, match=r"eta.*1e-50.*1e\+50"):
+        fresnel.reflectances(eta, 0.3)
+
+
+def test_zero_real_part_is_a_lossless_plasma():
+    """n = 0 is allowed (eta purely imaginary): total reflection at every angle, R + T = 1."""
+    theta = np.linspace(0, np.pi / 2, 13)
+    Rs, Rp = fresnel.reflectances(-2.5j, theta)
+    np.testing.assert_allclose(Rs, 1, atol=1e-14)
+    np.testing.assert_allclose(Rp, 1, atol=1e-14)
+    Ts, Tp = fresnel.transmittances(-2.5j, theta)
+    np.testing.assert_allclose(Ts + Tp, 0, atol=1e-14)
+
+
+# ---------------------------------------------------------------- the reduced-coefficient kernel
+@pytest.mark.parametrize("eta", ETAS + TINY_ETAS[:3])
+def test_reduced_coefficients_times_one_minus_eta2_are_the_coefficients(eta):
+    theta = np.linspace(0, 1.5, 11)
+    red = fresnel.reduced_coefficients(eta, np.cos(theta), np.sin(theta) ** 2)
+    refs = map(np.array, zip(*(mp_coefficients(complex(eta), t) for t in theta)))
+    for r, r_ref in zip((red.rs, red.rp), refs):
+        np.testing.assert_allclose((1 - eta**2) * r, r_ref, rtol=1e-12, atol=1e-15)
+    e = mpmath.mpc(complex(eta).real, complex(eta).imag)
+    np.testing.assert_allclose(red.scale, float(abs(1 - e**2) ** 2), rtol=1e-14)
+
+
+@pytest.mark.parametrize("eta", [3.23 - 4.35j, 1.5 - 0.01j, 0.314 - 3.544j, 1 - 0.2j, 0.6 - 1e-3j])
+def test_smooth_dolp_gradient_equals_central_differences(eta):
+    theta = np.radians([5, 30, 55, 80, 89])
+    P, g = fresnel.smooth_dolp(eta, np.cos(theta), gradient=True)
+    h = 1e-7
+    for k, step in enumerate((h, -1j * h)):
+        up = fresnel.smooth_dolp(eta + step, np.cos(theta))[0]
+        dn = fresnel.smooth_dolp(eta - step, np.cos(theta))[0]
+        np.testing.assert_allclose(g[:, k], (up - dn) / (2 * h), rtol=1e-6, atol=1e-8)
+    Rs, Rp = fresnel.reflectances(eta, theta)
+    np.testing.assert_allclose(P, (Rs - Rp) / (Rs + Rp), rtol=1e-12, atol=1e-15)
+
+
+def test_smooth_dolp_is_continuous_at_eta_one_and_zero_for_a_conductor():
+    c = np.cos(np.radians([10, 40, 70]))
+    at_one, near_one = fresnel.smooth_dolp(1.0, c)[0], fresnel.smooth_dolp(1 + 1e-9, c)[0]
+    np.testing.assert_allclose(at_one, near_one, rtol=1e-7)
+    assert np.all(fresnel.smooth_dolp("pec", c)[0] == 0)
+    with pytest.raises(ValueError, match="cos_theta"):
+        fresnel.smooth_dolp(1.5, 1.2)

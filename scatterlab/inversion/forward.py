@@ -28,8 +28,8 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from scatterlab._checks import as_angle
-from scatterlab.fresnel import _refraction_term
-from scatterlab.pbrdf import Model
+from scatterlab.fresnel import smooth_dolp
+from scatterlab.pbrdf import Model, facet_dolp, shadowing_strategy
 from scatterlab.pbrdf.geometry import facet_geometry
 
 __all__ = ["DolpForward"]
@@ -38,35 +38,9 @@ _SIGMA_TABLE = (1e-3, 2.5)
 _SIGMA_NODES = 4097
 
 
-def _facet_dolp_inplane(n, kappa, cos_beta, *, gradient: bool):
-    """Facet DOLP (..., M) at facet-angle cosines (M,) and, optionally, its gradient (..., M, 2) in (n, kappa)."""
-    eta = (np.maximum(n, 1e-9) - 1j * np.maximum(kappa, 0.0))[..., None]
-    c = cos_beta
-    c2 = c * c
-    s2 = 1 - c2
-    u = _refraction_term(eta, c2)  # A - jB, A, B >= 0, cancellation-free (errata to Eq. 49)
-    u = np.where(np.abs(u) < 1e-12, 1e-12, u)  # n = sin(beta), kappa = 0: branch point, keep the slope finite
-    eta2 = eta * eta
-    ds = c + u
-    dp = eta2 * c + u
-    num_p = eta2 * c2 - s2
-    rs = 1.0 / (ds * ds)
-    rp = -num_p / (dp * dp)
-    a = rs.real**2 + rs.imag**2
-    b = rp.real**2 + rp.imag**2
-    tot = a + b
-    P = (a - b) / tot
-    if not gradient:
-        return P, None
-    du = eta / u
-    drs = -2.0 * du / (ds * ds * ds)
-    drp = -(2 * eta * c2 * dp - 2 * num_p * (2 * eta * c + du)) / (dp * dp * dp)
-    grad = np.empty(P.shape + (2,))
-    tot2 = tot * tot
-    for k, (ga, gb) in enumerate(((2 * (rs.conj() * drs).real, 2 * (rp.conj() * drp).real),
-                                  (2 * (rs.conj() * drs).imag, 2 * (rp.conj() * drp).imag))):
-        grad[..., k] = 2 * (b * ga - a * gb) / tot2
-    return P, grad
+def _eta(n, kappa):
+    """eta from parameters the fit may push to the bounds (n >= 1e-9, kappa >= 0)."""
+    return np.maximum(n, 1e-9) - 1j * np.maximum(kappa, 0.0)
 
 
 class DolpForward:
@@ -92,6 +66,7 @@ class DolpForward:
         self.model_kw = model_kw
         self.inplane = bool(np.all(ph == np.pi))
         self.cos_beta = np.cos((ti + tr) / 2)
+        self.sin2_beta = np.sin((ti + tr) / 2) ** 2
         self.sigma_known = None if sigma is None else np.asarray(sigma, float)
         self._fixed_fraction = None if sigma is None else self.fraction(self.sigma_known)[0]
         self.n_params = 3 if sigma is None else 2
@@ -105,12 +80,11 @@ class DolpForward:
         """Facet DOLP (..., M) and, with ``gradient``, d/d(n, kappa) as (..., M, 2)."""
         n, kappa = np.asarray(n, float), np.asarray(kappa, float)
         if self.inplane:
-            return _facet_dolp_inplane(n, kappa, self.cos_beta, gradient=gradient)
-        smooth = Model(0.3, diffuse="none", **{k: v for k, v in self.model_kw.items() if k == "shadowing"})
+            eta = _eta(n, kappa)[..., None]
+            return smooth_dolp(eta, self.cos_beta, self.sin2_beta, gradient=gradient, checked=True)
 
         def f(nn, kk):
-            eta = (np.maximum(nn, 1e-9) - 1j * np.maximum(kk, 0.0))[..., None]
-            return smooth.dolp(eta, self.theta_i, self.theta_r, self.phi)
+            return facet_dolp(_eta(nn, kk)[..., None], self.theta_i, self.theta_r, self.phi)
 
         P = f(n, kappa)
         if not gradient:
@@ -126,10 +100,15 @@ class DolpForward:
 
     def _build_fraction_table(self):
         """Per geometry: log(Gamma/p) (sigma-free for Torrance-Sparrow and no shadowing) and D on a log-sigma grid."""
-        shadowing = self.model_kw.get("shadowing", "torrance-sparrow")
-        if (shadowing == "smith" or self.model_kw.get("diffuse", "hyde") != "hyde"
-                or self.model_kw.get("distribution") is not None):
-            return None  # Smith's G depends on sigma; the reciprocal D has kinks a linear table smears
+        strategy = shadowing_strategy(self.model_kw.get("shadowing", "torrance-sparrow"))
+        if (
+            not strategy.sigma_free
+            or self.model_kw.get("diffuse", "hyde") != "hyde"
+            or self.model_kw.get("distribution") is not None
+        ):
+            return (
+                None  # Smith's G depends on sigma; the reciprocal D has kinks a linear table smears
+            )
         ti, tr, ph = self.theta_i, self.theta_r, self.phi
         lg1, _ = Model(1.0, **self.model_kw).log_lobe_terms(ti, tr, ph)
         t2 = facet_geometry(ti, tr, ph, checked=True).tan2_alpha
@@ -153,8 +132,15 @@ class DolpForward:
         # linear, and a cell touching one is taken as zero rather than a spurious tiny D
         m0, m1 = self._dD[k] * h, self._dD[k + 1] * h
         f2, f3 = f * f, f * f * f
-        cubic = (2 * f3 - 3 * f2 + 1) * D0 + (f3 - 2 * f2 + f) * m0 + (-2 * f3 + 3 * f2) * D1 + (f3 - f2) * m1
-        near_zero = (D_tab[np.maximum(k - 1, 0)] <= 0) | (D_tab[np.minimum(k + 2, grid.size - 1)] <= 0)
+        cubic = (
+            (2 * f3 - 3 * f2 + 1) * D0
+            + (f3 - 2 * f2 + f) * m0
+            + (-2 * f3 + 3 * f2) * D1
+            + (f3 - f2) * m1
+        )
+        near_zero = (D_tab[np.maximum(k - 1, 0)] <= 0) | (
+            D_tab[np.minimum(k + 2, grid.size - 1)] <= 0
+        )
         D = np.where((D0 > 0) & (D1 > 0), np.where(near_zero, D0 * (1 - f) + D1 * f, cubic), 0.0)
         s = sigma[..., None]
         with np.errstate(under="ignore", divide="ignore"):
@@ -165,7 +151,12 @@ class DolpForward:
         if not gradient:
             return R, None
         dG = G * (self._t2 / s**3 - 2 / s)
-        dcubic = ((6 * f2 - 6 * f) * D0 + (3 * f2 - 4 * f + 1) * m0 + (6 * f - 6 * f2) * D1 + (3 * f2 - 2 * f) * m1)
+        dcubic = (
+            (6 * f2 - 6 * f) * D0
+            + (3 * f2 - 4 * f + 1) * m0
+            + (6 * f - 6 * f2) * D1
+            + (3 * f2 - 2 * f) * m1
+        )
         dD = np.where((D0 > 0) & (D1 > 0), np.where(near_zero, D1 - D0, dcubic), 0.0) / (h * s)
         return R, np.where(tot > 0, (dG * D - G * dD) / (safe * safe), 0.0)
 
@@ -179,11 +170,17 @@ class DolpForward:
         sigma = np.asarray(sigma, float)
         if not hasattr(self, "_table"):
             self._table = self._build_fraction_table()
-        if (self._table is not None and np.all(sigma >= _SIGMA_TABLE[0]) and np.all(sigma <= _SIGMA_TABLE[1])):
+        if (
+            self._table is not None
+            and np.all(sigma >= _SIGMA_TABLE[0])
+            and np.all(sigma <= _SIGMA_TABLE[1])
+        ):
             return self._fraction_tabulated(sigma, gradient)
 
         def f(s):
-            return Model(s[..., None], **self.model_kw).specular_fraction(self.theta_i, self.theta_r, self.phi)
+            return Model(s[..., None], **self.model_kw).specular_fraction(
+                self.theta_i, self.theta_r, self.phi
+            )
 
         R = f(sigma)
         if not gradient:

@@ -21,21 +21,39 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import as_angle
+from scatterlab._checks import ETA_MIN, as_angle
+from scatterlab.fresnel import smooth_dolp
 
 __all__ = ["thilak_dop", "thilak_two_step", "ThilakFit"]
 
 
 def thilak_dop(n, kappa, beta) -> np.ndarray:
-    """Eq. 115 for any real (n, kappa) (the unconstrained fit may visit negative values); broadcasts."""
-    n, kappa, beta = np.asarray(n, float), np.asarray(kappa, float), np.asarray(beta, float)
-    s, c = np.sin(beta), np.cos(beta)
-    D = n * n - kappa * kappa - s * s
-    C = 4 * n * n * kappa * kappa + D * D
-    rc = np.sqrt(C)
-    A = np.sqrt(np.maximum(rc + D, 0) / 2)
-    B = np.sqrt(np.maximum(rc - D, 0) / 2)
-    return 2 * A * s * s * c / (A * A * c * c + s**4 + B * B * c * c)
+    """Eq. 115 for any real (n, kappa) (the unconstrained fit may visit negative values); broadcasts.
+
+    Eq. 115 depends on ``n`` and ``kappa`` through ``n^2``, ``kappa^2`` and ``(n kappa)^2`` only, and
+    for ``n, kappa >= 0`` it is the smooth-facet DOLP ``(Rs - Rp)/(Rs + Rp)``: this evaluates the
+    package's kernel :func:`scatterlab.fresnel.smooth_dolp` at ``|n| - j|kappa|`` (tested equal to
+    the printed formula with the errata's A and B), continued as an odd function of ``cos(beta)``
+    like the printed formula.
+
+    Parameters
+    ----------
+    n, kappa : array_like
+        Real and imaginary parts of the index (any sign).
+    beta : array_like [rad]
+        Facet angle.
+
+    Returns
+    -------
+    ndarray, broadcast shape.
+    """
+    n, kappa, beta = np.broadcast_arrays(
+        np.abs(np.asarray(n, float)), np.abs(np.asarray(kappa, float)), np.asarray(beta, float)
+    )
+    eta = n - 1j * kappa
+    eta = np.where(np.abs(eta) < ETA_MIN, ETA_MIN, eta)  # n = kappa = 0: the limit |eta| -> 0
+    c = np.cos(beta)  # the fit may visit beta > 90 deg, where Eq. 115 is odd in cos(beta)
+    return np.sign(c) * smooth_dolp(eta, np.abs(c), np.sin(beta) ** 2, checked=True)[0]
 
 
 @dataclass
@@ -49,7 +67,9 @@ class ThilakFit:
     ok: np.ndarray
 
 
-def thilak_two_step(dop, theta_i, theta_r_nominal, rng, *, start=(1.0, 1.0), max_restarts: int = 50) -> ThilakFit:
+def thilak_two_step(
+    dop, theta_i, theta_r_nominal, rng, *, start=(1.0, 1.0), max_restarts: int = 50
+) -> ThilakFit:
     """Thilak et al.'s two-step method for each row of ``dop`` (K, M) measured at ``theta_i`` (M,).
 
     Parameters
@@ -68,9 +88,13 @@ def thilak_two_step(dop, theta_i, theta_r_nominal, rng, *, start=(1.0, 1.0), max
     ti = as_angle(theta_i, "theta_i").ravel()
     tr0 = float(as_angle(theta_r_nominal, "theta_r_nominal"))
     if y.shape[-1] != ti.size:
-        raise ValueError(f"dop must have {ti.size} values per trial (one per theta_i), got shape {y.shape}")
+        raise ValueError(
+            f"dop must have {ti.size} values per trial (one per theta_i), got shape {y.shape}"
+        )
     if ti.size < 3:
-        raise ValueError("theta_i must hold at least 3 measurements (Eq. 116 has two unknowns plus theta_r)")
+        raise ValueError(
+            "theta_i must hold at least 3 measurements (Eq. 116 has two unknowns plus theta_r)"
+        )
     beta = (ti + tr0) / 2
     K = y.shape[0]
     out = np.full((K, 3), np.nan)
@@ -78,12 +102,17 @@ def thilak_two_step(dop, theta_i, theta_r_nominal, rng, *, start=(1.0, 1.0), max
     for k, row in enumerate(y):
         x0 = np.array(start, float)
         for attempt in range(max_restarts + 1):
-            r1 = optimize.least_squares(lambda p, row=row: thilak_dop(p[0], p[1], beta) - row, x0, method="lm")
+            r1 = optimize.least_squares(
+                lambda p, row=row: thilak_dop(p[0], p[1], beta) - row, x0, method="lm"
+            )
             n, kap = r1.x
             ok = n >= 0 and kap >= 0
             if ok:
-                r2 = optimize.least_squares(lambda t, row=row, n=n, kap=kap: thilak_dop(n, kap, (ti + t[0]) / 2) - row,
-                                            [tr0], method="lm")
+                r2 = optimize.least_squares(
+                    lambda t, row=row, n=n, kap=kap: thilak_dop(n, kap, (ti + t[0]) / 2) - row,
+                    [tr0],
+                    method="lm",
+                )
                 t_r = float(r2.x[0])
                 ok = 0 < t_r < np.pi / 2
             if ok:

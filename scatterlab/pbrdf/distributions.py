@@ -48,8 +48,17 @@ class FacetDistribution:
         raise NotImplementedError
 
     def smith_lambda(self, tan_theta: np.ndarray) -> np.ndarray:
-        raise ValueError(f"Smith shadowing has no closed form for {type(self).__name__}; "
-                         "shadowing must be 'torrance-sparrow' or 'none' for it")
+        raise ValueError(
+            f"Smith shadowing has no closed form for {type(self).__name__}; "
+            "shadowing must be 'torrance-sparrow' or 'none' for it"
+        )
+
+    def smith_lambda_cos(self, cos_theta: np.ndarray) -> np.ndarray:
+        """``cos(theta) * Lambda(theta)``, finite at grazing (``cos theta = 0``), where Lambda is infinite."""
+        raise ValueError(
+            f"Smith shadowing has no closed form for {type(self).__name__}; "
+            "shadowing must be 'torrance-sparrow' or 'none' for it"
+        )
 
     @property
     def rms_slope(self) -> float:
@@ -57,16 +66,20 @@ class FacetDistribution:
         raise NotImplementedError
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Beckmann(FacetDistribution):
-    """Gaussian slopes with per-axis rms slope ``sigma`` (Eq. 127): ``p = exp(-tan^2/(2 sigma^2)) / (2 pi sigma^2)``."""
+    """Gaussian slopes with per-axis rms slope ``sigma`` (Eq. 127): ``p = exp(-tan^2/(2 sigma^2)) / (2 pi sigma^2)``.
+
+    ``sigma`` may be an array in ``[1e-4, 5]``; it broadcasts against the slopes.
+    """
 
     sigma: float
 
     def __post_init__(self):
-        s = float(as_positive(self.sigma, "sigma"))
-        if not 1e-4 <= s <= 5:
+        s = as_positive(self.sigma, "sigma")
+        if not np.all((s >= 1e-4) & (s <= 5)):
             raise ValueError("sigma (per-axis rms facet slope) must be in [1e-4, 5]")
+        object.__setattr__(self, "sigma", float(s) if s.ndim == 0 else s)
 
     @classmethod
     def from_height(cls, sigma_h: float, corr_length: float) -> "Beckmann":
@@ -87,20 +100,42 @@ class Beckmann(FacetDistribution):
         t = np.asarray(tan_theta, float)
         with np.errstate(divide="ignore"):
             a = np.where(t > 0, 1.0 / (np.sqrt(2.0) * self.sigma * np.where(t > 0, t, 1.0)), np.inf)
-        big = a > 25  # Lambda < 1e-270: zero to double precision
-        grazing = a < 1e-150  # theta -> 90 deg: fully masked (and a^2 would underflow)
-        a_s = np.where(big | grazing, 1.0, a)
-        # 1/(a sqrt(pi)) - erfcx(a) cancels for large a: use its asymptotic series there (a >= 10: < 1e-12 rel.)
-        x = 1.0 / (2 * np.maximum(a_s, 10.0) ** 2)  # only used where a >= 10
-        series = x * (1 - 3 * x * (1 - 5 * x * (1 - 7 * x * (1 - 9 * x * (1 - 11 * x)))))
-        diff = np.where(a_s >= 10, series / (a_s * np.sqrt(np.pi)),
-                        1.0 / (a_s * np.sqrt(np.pi)) - special.erfcx(a_s))
-        lam = 0.5 * np.exp(-a_s * a_s) * diff
-        return np.where(big, 0.0, np.where(grazing, np.inf, np.maximum(lam, 0.0)))
+        return _beckmann_lambda(a)
+
+    def smith_lambda_cos(self, cos_theta):
+        r""":math:`\cos\theta\,\Lambda = \tfrac12 e^{-a^2}\sqrt2\sigma\sin\theta\,(1/\sqrt\pi - a\,\mathrm{erfcx}(a))`, finite at grazing."""
+        c = np.clip(np.asarray(cos_theta, float), 0.0, 1.0)
+        s = np.sqrt((1 - c) * (1 + c))
+        k = np.sqrt(2.0) * self.sigma * s
+        with np.errstate(divide="ignore"):
+            a = np.where(k > 0, c / np.where(k > 0, k, 1.0), np.inf)
+        small = a < 10
+        a_s = np.where(small, a, 1.0)
+        near = 0.5 * np.exp(-a_s * a_s) * k * (1 / np.sqrt(np.pi) - a_s * special.erfcx(a_s))
+        return np.where(
+            small, np.maximum(near, 0.0), c * _beckmann_lambda(np.where(small, 10.0, a))
+        )
 
     @property
     def rms_slope(self):
         return self.sigma
+
+
+def _beckmann_lambda(a):
+    """Smith's Lambda of Beckmann slopes as a function of ``a = cot(theta)/(sqrt(2) sigma)``."""
+    big = a > 25  # Lambda < 1e-270: zero to double precision
+    grazing = a < 1e-150  # theta -> 90 deg: fully masked (and a^2 would underflow)
+    a_s = np.where(big | grazing, 1.0, a)
+    # 1/(a sqrt(pi)) - erfcx(a) cancels for large a: use its asymptotic series there (a >= 10: < 1e-12 rel.)
+    x = 1.0 / (2 * np.maximum(a_s, 10.0) ** 2)  # only used where a >= 10
+    series = x * (1 - 3 * x * (1 - 5 * x * (1 - 7 * x * (1 - 9 * x * (1 - 11 * x)))))
+    diff = np.where(
+        a_s >= 10,
+        series / (a_s * np.sqrt(np.pi)),
+        1.0 / (a_s * np.sqrt(np.pi)) - special.erfcx(a_s),
+    )
+    lam = 0.5 * np.exp(-a_s * a_s) * diff
+    return np.where(big, 0.0, np.where(grazing, np.inf, np.maximum(lam, 0.0)))
 
 
 @dataclass(frozen=True)
@@ -128,6 +163,14 @@ class HyperCauchy(FacetDistribution):
         t = np.asarray(tan_theta, float)
         x = (self.b * t) ** 2
         return x / (1 + np.sqrt(1 + x)) / 2  # (sqrt(1 + b^2 tan^2) - 1)/2 without cancellation
+
+    def smith_lambda_cos(self, cos_theta):
+        """``cos(theta) Lambda = b^2 sin^2 / (2 (cos + sqrt(cos^2 + b^2 sin^2)))`` (nu = 2), finite at grazing."""
+        if self.nu != 2.0:
+            return super().smith_lambda_cos(cos_theta)
+        c = np.clip(np.asarray(cos_theta, float), 0.0, 1.0)
+        bs2 = self.b**2 * (1 - c) * (1 + c)
+        return bs2 / (c + np.sqrt(c * c + bs2)) / 2
 
     @property
     def rms_slope(self):

@@ -1,12 +1,18 @@
-r"""Closed-form DOLP expressions for comparison with the pBRDF.
+r"""The facet's reflection and its DOLP: the Jones elements of Eq. 169 and the closed forms.
 
+* :func:`facet_jones` -- the Jones elements of a facet seen in the macroscopic bases (Eq. 169),
+  built on the reduced Fresnel kernel :func:`scatterlab.fresnel.reduced_coefficients`;
+* :func:`facet_dolp` -- the DOLP of unpolarized light reflected by the facet at any
+  (theta_i, theta_r, phi): the pBRDF's DOLP without the diffuse term;
 * :func:`dolp_smooth_facet` -- :math:`(R_s - R_p)/(R_s + R_p)` at the facet angle
   :math:`\beta` (Eq. 114): the DOLP of light scattered by optically smooth facets,
   Thilak et al.'s forward model (Eq. 115 with the errata's A, B and facet angle);
 * :func:`dolp_thilak` -- the same in the specular plane as a function of
   (theta_i, theta_r), :math:`\beta = (\theta_i + \theta_r)/2` (Eq. 112).
 
-The full pBRDF DOLP (Eq. 203 and out of plane) is :meth:`scatterlab.pbrdf.Model.dolp`.
+All are thin layers over :func:`scatterlab.fresnel.smooth_dolp` and
+:func:`scatterlab.polarization.mueller.mueller_from_jones_elements`. The full pBRDF DOLP
+(Eq. 203 and out of plane) is :meth:`scatterlab.pbrdf.Model.dolp`.
 """
 
 from __future__ import annotations
@@ -14,26 +20,115 @@ from __future__ import annotations
 import numpy as np
 
 from scatterlab._checks import as_angle, as_index, broadcast
-from scatterlab.pbrdf.model import _reduced_fresnel
+from scatterlab.fresnel import reduced_coefficients, smooth_dolp
+from scatterlab.pbrdf.geometry import FacetGeometry, check_angles, facet_geometry, polar_cos_sin
+from scatterlab.polarization.mueller import mueller_from_jones_elements
 
-__all__ = ["dolp_smooth_facet", "dolp_thilak"]
+__all__ = ["facet_jones", "facet_dolp", "dolp_smooth_facet", "dolp_thilak"]
+
+
+def facet_jones(eta, geo: FacetGeometry, *, in_plane: bool = False):
+    """Jones elements ``(T_ss, T_ps, T_sp, T_pp)`` of Eq. 169 in reduced form, and the scale.
+
+    Parameters
+    ----------
+    eta : complex ndarray (validated) or ``"pec"``
+    geo : FacetGeometry
+    in_plane : bool
+        The rotations vanish (specular plane): ``T_ps = T_sp = None`` (a diagonal Jones matrix).
+
+    Returns
+    -------
+    a, b, c, d : complex ndarrays (``b, c`` None in plane), the reduced elements; the true ones
+        are ``(1 - eta^2)`` times these.
+    scale : ndarray, ``|1 - eta^2|^2`` times the normalization of
+        :func:`~scatterlab.fresnel.reduced_coefficients` (elements bounded by 1); 0 at ``eta = 1``,
+        where the reduced elements may be inf at exact grazing: the caller zeroes F there.
+    """
+    red = reduced_coefficients(eta, geo.cos_beta, geo.sin2_beta, normalize=True, checked=True)
+    rs, rp, scale = red.rs, red.rp, red.scale
+    if in_plane:
+        return rs, None, None, rp, scale
+    ci, si, cr, sr = geo.cos_gi, geo.sin_gi, geo.cos_gr, geo.sin_gr
+    return (
+        (cr * ci) * rs + (sr * si) * rp,
+        (cr * si) * rs - (sr * ci) * rp,
+        (sr * ci) * rs - (cr * si) * rp,
+        (sr * si) * rs + (cr * ci) * rp,
+        scale,
+    )
+
+
+def facet_dolp(eta, theta_i, theta_r, phi=np.pi) -> np.ndarray:
+    """DOLP of unpolarized light reflected by the facet joining ``theta_i`` to ``(theta_r, phi)``.
+
+    In the specular plane this is :func:`dolp_smooth_facet` at ``beta = (theta_i + theta_r)/2``;
+    elsewhere :math:`\\sqrt{M_{10}^2 + M_{20}^2}/M_{00}` of the facet's Mueller matrix (Eqs. 169,
+    133): the smooth-facet DOLP seen in the rotated macroscopic bases. It is the continuous
+    extension at ``eta = 1`` (a function of eta, used by the inversion), and the pBRDF's DOLP
+    without a diffuse term wherever the specular term is non-zero.
+
+    Parameters
+    ----------
+    eta : complex array_like or ``"pec"``
+    theta_i, theta_r : array_like [rad] in ``[0, pi/2]``
+    phi : array_like [rad], default ``pi``.
+
+    Returns
+    -------
+    ndarray in ``[0, 1]``, broadcast shape.
+    """
+    ti, tr, ph = check_angles(theta_i, theta_r, phi)
+    if not isinstance(eta, str):
+        eta = as_index(eta)
+        eta, ti, tr, ph = broadcast(eta=eta, theta_i=ti, theta_r=tr, phi=ph)
+    geo = facet_geometry(ti, tr, ph, checked=True)
+    a, b, c, d, _ = facet_jones(eta, geo)
+    m = mueller_from_jones_elements(a, b, c, d, shape=(3, 1))[..., 0]
+    with np.errstate(invalid="ignore"):  # beta = 90 deg: R_s = R_p = 1 (the limit at eta = 1 too)
+        return np.where(
+            geo.cos_beta == 0, 0.0, np.clip(np.hypot(m[..., 1], m[..., 2]) / m[..., 0], 0.0, 1.0)
+        )
 
 
 def dolp_smooth_facet(eta, beta) -> np.ndarray:
-    """DOLP ``(Rs - Rp)/(Rs + Rp)`` of unpolarized light reflected at facet angle ``beta`` [rad] (Eqs. 57, 114).
+    """DOLP ``(Rs - Rp)/(Rs + Rp)`` of unpolarized light reflected at facet angle ``beta`` [rad].
 
-    Continuous at ``eta -> 1`` (computed from reduced coefficients). Returns values in ``[0, 1]``.
+    Eqs. 57, 114.
+
+    :func:`scatterlab.fresnel.smooth_dolp` with validated arguments: continuous at ``eta -> 1``.
+
+    Parameters
+    ----------
+    eta : complex array_like or ``"pec"``
+    beta : array_like [rad] in ``[0, pi/2]``
+
+    Returns
+    -------
+    ndarray in ``[0, 1]``, broadcast shape.
     """
-    eta = as_index(eta)
     beta = as_angle(beta, "beta")
-    eta, beta = broadcast(eta=eta, beta=beta)
-    rs, rp, _ = _reduced_fresnel(eta, np.cos(beta))
-    Rs, Rp = np.abs(rs) ** 2, np.abs(rp) ** 2
-    return np.clip((Rs - Rp) / (Rs + Rp), 0.0, 1.0)
+    if not isinstance(eta, str):
+        eta = as_index(eta)
+        eta, beta = broadcast(eta=eta, beta=beta)
+    cb, sb = polar_cos_sin(beta)
+    return np.clip(smooth_dolp(eta, cb, sb * sb, checked=True)[0], 0.0, 1.0)
 
 
 def dolp_thilak(eta, theta_i, theta_r) -> np.ndarray:
-    """Thilak et al.'s DOLP (Eq. 115) in the specular plane: the smooth-facet DOLP at ``beta = (theta_i + theta_r)/2``."""
+    """Thilak et al.'s DOLP (Eq. 115) in the specular plane.
+
+    The smooth-facet DOLP at ``beta = (theta_i + theta_r)/2``.
+
+    Parameters
+    ----------
+    eta : complex array_like or ``"pec"``
+    theta_i, theta_r : array_like [rad] in ``[0, pi/2]``
+
+    Returns
+    -------
+    ndarray in ``[0, 1]``, broadcast shape.
+    """
     ti = as_angle(theta_i, "theta_i")
     tr = as_angle(theta_r, "theta_r")
     return dolp_smooth_facet(eta, (ti + tr) / 2)

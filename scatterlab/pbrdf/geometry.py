@@ -47,7 +47,15 @@ import numpy as np
 
 from scatterlab._checks import as_angle, as_finite, broadcast
 
-__all__ = ["FacetGeometry", "facet_geometry", "check_angles"]
+__all__ = [
+    "FacetGeometry",
+    "facet_geometry",
+    "in_plane_geometry",
+    "check_angles",
+    "polar_cos",
+    "polar_cos_sin",
+    "azimuth_cos_sin",
+]
 
 
 @dataclass(frozen=True)
@@ -61,6 +69,9 @@ class FacetGeometry:
     cos_alpha : facet tilt cosine.
     cos_beta : cosine of the local angle of incidence on the facet (``beta`` property [rad]).
     cos_gi, sin_gi, cos_gr, sin_gr : rotation cosines and sines of Eq. 169.
+    sin2_beta : :math:`\\sin^2\\beta = |\\hat s_i - \\hat s_r|^2/4`, to full relative accuracy near
+        backscatter (where ``1 - cos^2`` would lose it); None where not computed.
+    in_plane : True for :func:`in_plane_geometry` (the rotations vanish identically).
     """
 
     cos_theta_i: np.ndarray
@@ -72,6 +83,8 @@ class FacetGeometry:
     sin_gi: np.ndarray
     cos_gr: np.ndarray
     sin_gr: np.ndarray
+    sin2_beta: np.ndarray | None = None
+    in_plane: bool = False
 
     @property
     def beta(self) -> np.ndarray:
@@ -102,13 +115,52 @@ def check_angles(theta_i, theta_r, phi):
     return broadcast(theta_i=ti, theta_r=tr, phi=ph)
 
 
-def facet_geometry(theta_i, theta_r, phi, *, rotations: bool = True, checked: bool = False) -> FacetGeometry:
+def polar_cos(theta):
+    """``cos`` of polar angles in ``[0, pi/2]``; ``theta == pi/2`` (the float) is exactly grazing.
+
+    ``np.cos(np.pi / 2)`` is 6.1e-17, not 0: without the snap a direction given as grazing would sit
+    6e-17 rad above the horizon, where the pBRDF has singular peaks of 1e30 and more.
+    """
+    theta = np.asarray(theta, float)
+    c = np.cos(theta)
+    if theta.ndim == 0:
+        return np.float64(0.0) if theta == np.pi / 2 else c
+    c[theta == np.pi / 2] = 0.0
+    return c
+
+
+def polar_cos_sin(theta):
+    """``cos, sin`` of polar angles in ``[0, pi/2]``, with :func:`polar_cos`'s grazing snap."""
+    return polar_cos(theta), np.sin(theta)
+
+
+_QUARTER = (1.0, 0.0, -1.0, 0.0)
+
+
+def azimuth_cos_sin(phi):
+    """``cos, sin`` of azimuths; multiples of ``pi/2`` given as floats (``np.pi``) are exact.
+
+    So ``phi = np.pi`` is exactly the specular plane on every path (``np.sin(np.pi)`` is 1.2e-16).
+    """
+    phi = np.asarray(phi, float)
+    q = np.round(phi / (np.pi / 2))
+    exact = q * (np.pi / 2) == phi
+    k = np.where(exact, q, 0).astype(np.intp) % 4
+    table = np.array(_QUARTER)
+    cp = np.where(exact, table[k], np.cos(phi))
+    sp = np.where(exact, table[(k - 1) % 4], np.sin(phi))
+    return cp, sp
+
+
+def facet_geometry(
+    theta_i, theta_r, phi, *, rotations: bool = True, checked: bool = False
+) -> FacetGeometry:
     """Facet angles and polarization-frame rotations for any (theta_i, theta_r, phi).
 
     Parameters
     ----------
     theta_i, theta_r : array_like
-        Incidence and observation angles [rad] in ``[0, pi/2]``.
+        Incidence and observation angles [rad] in ``[0, pi/2]``; ``pi/2`` is exactly grazing.
     phi : array_like
         Azimuth of observation relative to incidence [rad]; ``pi`` is the specular plane.
     rotations : bool
@@ -119,18 +171,22 @@ def facet_geometry(theta_i, theta_r, phi, *, rotations: bool = True, checked: bo
     Returns
     -------
     FacetGeometry
+        Where both directions are grazing and opposite (``theta_i = theta_r = pi/2``, ``phi = pi``)
+        no facet normal exists: ``tan2_alpha = inf`` there (no facet reflects).
     """
     if not checked:
         theta_i, theta_r, phi = check_angles(theta_i, theta_r, phi)
-    si, ci = np.sin(theta_i), np.cos(theta_i)
-    sr, cr = np.sin(theta_r), np.cos(theta_r)
-    cp, sp = np.cos(phi), np.sin(phi)
+    ci, si = polar_cos_sin(theta_i)
+    cr, sr = polar_cos_sin(theta_r)
+    cp, sp = azimuth_cos_sin(phi)
     # h ~ s_i + s_r = (si + sr cp, sr sp, ci + cr)
     hx = si + sr * cp
     hy = sr * sp
     hz = ci + cr
     hxy2 = hx * hx + hy * hy
     norm2 = hxy2 + hz * hz  # = (2 cos beta)^2
+    dx, dz = si - sr * cp, ci - cr  # s_i - s_r = (dx, -hy, dz)
+    sin2_beta = np.minimum((dx * dx + hy * hy + dz * dz) / 4, 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         tan2_alpha = np.where(hz > 0, hxy2 / np.where(hz > 0, hz * hz, 1.0), np.inf)
     cos_beta = np.sqrt(norm2) / 2
@@ -138,7 +194,7 @@ def facet_geometry(theta_i, theta_r, phi, *, rotations: bool = True, checked: bo
     cos_alpha = np.where(norm2 > 0, hz / np.sqrt(np.where(norm2 > 0, norm2, 1.0)), 0.0)
     if not rotations:
         z = np.zeros_like(cos_beta)
-        return FacetGeometry(ci, cr, tan2_alpha, cos_alpha, cos_beta, z + 1, z, z + 1, z)
+        return FacetGeometry(ci, cr, tan2_alpha, cos_alpha, cos_beta, z + 1, z, z + 1, z, sin2_beta)
     # facet s axis: (s_i x s_r)/|.|
     mx = -ci * sr * sp
     my = ci * sr * cp - si * cr
@@ -149,9 +205,27 @@ def facet_geometry(theta_i, theta_r, phi, *, rotations: bool = True, checked: bo
     mx = np.where(degenerate, 0.0, mx / safe)
     my = np.where(degenerate, -1.0, my / safe)
     mz = np.where(degenerate, 0.0, mz / safe)
-    # macro bases: s_i^M = (0, -1, 0), p_i^M = (-ci, 0, si); s_r^M = (-sp, cp, 0), p_r^M = (-cr cp, -cr sp, sr)
+    # macro bases: s_i^M = (0, -1, 0), p_i^M = (-ci, 0, si);
+    # s_r^M = (-sp, cp, 0), p_r^M = (-cr cp, -cr sp, sr)
     cos_gi = -my
     sin_gi = -ci * mx + si * mz
     cos_gr = -sp * mx + cp * my
     sin_gr = -cr * cp * mx - cr * sp * my + sr * mz
-    return FacetGeometry(ci, cr, tan2_alpha, cos_alpha, cos_beta, cos_gi, sin_gi, cos_gr, sin_gr)
+    return FacetGeometry(
+        ci, cr, tan2_alpha, cos_alpha, cos_beta, cos_gi, sin_gi, cos_gr, sin_gr, sin2_beta
+    )
+
+
+def in_plane_geometry(theta_i, theta_r) -> FacetGeometry:
+    """:class:`FacetGeometry` in the specular plane (``phi = pi``) from closed forms (Eq. 112).
+
+    ``beta = (theta_i + theta_r)/2``, ``alpha = (theta_i - theta_r)/2``; the rotations vanish.
+    Equal to :func:`facet_geometry` at ``phi = pi`` to rounding (tested). Inputs already validated.
+    """
+    beta = (theta_i + theta_r) / 2
+    half = (theta_i - theta_r) / 2
+    ci, cr = polar_cos(theta_i), polar_cos(theta_r)
+    cb, sb = polar_cos_sin(beta)
+    t2 = np.where(ci + cr > 0, np.tan(half) ** 2, np.inf)
+    one, zero = np.ones_like(cb), np.zeros_like(cb)
+    return FacetGeometry(ci, cr, t2, np.cos(half), cb, one, zero, one, zero, sb * sb, True)

@@ -40,12 +40,15 @@ __all__ = [
     "nearest_physical_mueller",
 ]
 
-_PAULI = np.array([
-    [[1, 0], [0, 1]],
-    [[1, 0], [0, -1]],
-    [[0, 1], [1, 0]],
-    [[0, -1j], [1j, 0]],
-], dtype=complex)
+_PAULI = np.array(
+    [
+        [[1, 0], [0, 1]],
+        [[1, 0], [0, -1]],
+        [[0, 1], [1, 0]],
+        [[0, -1j], [1j, 0]],
+    ],
+    dtype=complex,
+)
 # Basis B_ij = sigma_i (x) conj(sigma_j), shape (4, 4, 4, 4): [i, j, row, col].
 _BASIS = np.einsum("iab,jcd->ijacbd", _PAULI, _PAULI.conj()).reshape(4, 4, 4, 4)
 
@@ -73,24 +76,84 @@ def jones_to_mueller(J) -> np.ndarray:
     return mueller_from_jones_elements(J[..., 0, 0], J[..., 0, 1], J[..., 1, 0], J[..., 1, 1])
 
 
-def mueller_from_jones_elements(a, b, c, d) -> np.ndarray:
-    """Eq. 133 from the Jones elements ``a = T_ss, b = T_ps, c = T_sp, d = T_pp`` given as separate arrays.
+# Eq. 133, element by element: M[i][j] from |J_k|^2 (sq) and J_k J_l^* (pr) of a = T_ss, b = T_ps,
+# c = T_sp, d = T_pp.
+_ELEMENTS = (
+    (
+        lambda q, p: 0.5 * (q("a") + q("b") + q("c") + q("d")),
+        lambda q, p: 0.5 * (q("a") - q("b") + q("c") - q("d")),
+        lambda q, p: p("ab").real + p("cd").real,
+        lambda q, p: p("ab").imag + p("cd").imag,
+    ),
+    (
+        lambda q, p: 0.5 * (q("a") + q("b") - q("c") - q("d")),
+        lambda q, p: 0.5 * (q("a") - q("b") - q("c") + q("d")),
+        lambda q, p: p("ab").real - p("cd").real,
+        lambda q, p: p("ab").imag - p("cd").imag,
+    ),
+    (
+        lambda q, p: p("ac").real + p("bd").real,
+        lambda q, p: p("ac").real - p("bd").real,
+        lambda q, p: p("ad").real + p("bc").real,
+        lambda q, p: p("ad").imag - p("bc").imag,
+    ),
+    (
+        lambda q, p: -p("ac").imag - p("bd").imag,
+        lambda q, p: p("bd").imag - p("ac").imag,
+        lambda q, p: -p("ad").imag - p("bc").imag,
+        lambda q, p: p("ad").real - p("bc").real,
+    ),
+)
 
-    Same result as :func:`jones_to_mueller`; avoids building the ``(..., 2, 2)`` array, and writes the
-    output contiguously. Returns shape ``(..., 4, 4)``.
+
+def mueller_from_jones_elements(a, b, c, d, *, shape: tuple[int, int] = (4, 4)) -> np.ndarray:
+    """Eq. 133 from the Jones elements ``a = T_ss, b = T_ps, c = T_sp, d = T_pp`` given as arrays.
+
+    The one Jones-to-Mueller kernel: :func:`jones_to_mueller`, the smooth-surface matrix
+    (:func:`scatterlab.fresnel.mueller_matrix`) and every pBRDF path use it.
+
+    Parameters
+    ----------
+    a, b, c, d : array_like of complex, broadcasting
+        Jones elements; ``b`` and ``c`` may be None for a diagonal Jones matrix (a reflection in
+        the plane of incidence), which skips their products.
+    shape : (int, int)
+        The leading block of rows and columns to compute, e.g. ``(3, 3)`` for linear polarimetry
+        or ``(3, 1)`` for the first column (unpolarized illumination). Default the full matrix.
+
+    Returns
+    -------
+    M : ndarray, shape ``(..., rows, cols)``, real.
     """
-    aa, bb, cc, dd = (x.real * x.real + x.imag * x.imag for x in (a, b, c, d))
-    ab, cd, ac, bd, ad, bc = (a * b.conj(), c * d.conj(), a * c.conj(), b * d.conj(),
-                              a * d.conj(), b * c.conj())
-    s_ab, d_ab = aa + bb, aa - bb
-    s_cd, d_cd = cc + dd, cc - dd
-    M = np.stack([
-        0.5 * (s_ab + s_cd), 0.5 * (d_ab + d_cd), ab.real + cd.real, ab.imag + cd.imag,
-        0.5 * (s_ab - s_cd), 0.5 * (d_ab - d_cd), ab.real - cd.real, ab.imag - cd.imag,
-        ac.real + bd.real, ac.real - bd.real, ad.real + bc.real, ad.imag - bc.imag,
-        -ac.imag - bd.imag, bd.imag - ac.imag, -ad.imag - bc.imag, ad.real - bc.real,
-    ], axis=-1)
-    return M.reshape(M.shape[:-1] + (4, 4))
+    J = {"a": a, "b": b, "c": c, "d": d}
+    cache = {}
+
+    def q(k):
+        if J[k] is None:
+            return 0.0
+        if k not in cache:
+            x = J[k]
+            cache[k] = x.real * x.real + x.imag * x.imag
+        return cache[k]
+
+    def p(kl):
+        x, y = J[kl[0]], J[kl[1]]
+        if x is None or y is None:
+            return 0j
+        if kl not in cache:
+            cache[kl] = x * np.conj(y)
+        return cache[kl]
+
+    rows, cols = shape
+    out_shape = np.broadcast_shapes(*(np.shape(x) for x in J.values() if x is not None))
+    diagonal = b is None or c is None
+    M = (np.zeros if diagonal else np.empty)(out_shape + (rows * cols,))
+    for i in range(rows):
+        for j in range(cols):
+            value = _ELEMENTS[i][j](q, p)
+            if not diagonal or np.ndim(value) or value != 0:  # diagonal J: 8 elements stay 0
+                M[..., i * cols + j] = value
+    return M.reshape(out_shape + (rows, cols))
 
 
 def apply(M, S) -> np.ndarray:
@@ -171,8 +234,9 @@ def linear_retarder(retardance, fast_axis=0.0) -> np.ndarray:
     -------
     M : ndarray, shape ``(..., 4, 4)``.
     """
-    d, t = broadcast(retardance=as_finite(retardance, "retardance"),
-                     fast_axis=as_finite(fast_axis, "fast_axis"))
+    d, t = broadcast(
+        retardance=as_finite(retardance, "retardance"), fast_axis=as_finite(fast_axis, "fast_axis")
+    )
     M = np.zeros(d.shape + (4, 4))
     M[..., 0, 0] = M[..., 1, 1] = 1
     M[..., 2, 2] = M[..., 3, 3] = np.cos(d)

@@ -142,3 +142,20 @@ def test_nearest_physical_mueller(rng):
     np.testing.assert_allclose(P.nearest_physical_mueller(fixed), fixed, atol=1e-12)
     # never farther from the truth than the noisy estimate (projection onto a convex set)
     assert np.all(np.linalg.norm(fixed - M, axis=(-2, -1)) <= np.linalg.norm(noisy - M, axis=(-2, -1)) + 1e-12)
+
+
+def test_jones_kernel_blocks_and_diagonal_form_equal_the_kronecker_derivation():
+    """The one Jones-to-Mueller kernel against the Kronecker-product derivation: every block the
+    pBRDF asks for (full, linear 3x3, first column) and the diagonal shortcut (b = c = None)."""
+    from scatterlab.polarization.mueller import mueller_from_jones_elements
+
+    rng = np.random.default_rng(12)
+    J = rng.normal(size=(50, 2, 2)) + 1j * rng.normal(size=(50, 2, 2))
+    ref = np.array([kron_mueller(j) for j in J])
+    a, b, c, d = J[:, 0, 0], J[:, 0, 1], J[:, 1, 0], J[:, 1, 1]
+    np.testing.assert_allclose(mueller_from_jones_elements(a, b, c, d), ref, atol=1e-12)
+    for shape in [(3, 3), (3, 1), (1, 1)]:
+        got = mueller_from_jones_elements(a, b, c, d, shape=shape)
+        np.testing.assert_allclose(got, ref[:, : shape[0], : shape[1]], atol=1e-12)
+    ref_d = np.array([kron_mueller(j * np.eye(2)) for j in J])
+    np.testing.assert_allclose(mueller_from_jones_elements(a, None, None, d), ref_d, atol=1e-12)
