@@ -165,8 +165,13 @@ def pixel_maps(stack, thetas, sigma) -> PixelMaps:
 
     # a DOLP far outside [0, 1] is a dark pixel's noise, not a measurement: undefined (NaN), as the
     # convention for zero light says; fit_dolp masks NaN entries
+    from scatterlab.inversion import IdentifiabilityWarning
+
     y = np.where((stack >= -PIXEL_DOLP_MARGIN) & (stack <= 1 + PIXEL_DOLP_MARGIN), stack, np.nan)
-    fit = fit_dolp(np.moveaxis(y, 0, -1), thetas, thetas, sigma=sigma)
+    with warnings.catch_warnings():
+        # paint pixels fitted at kappa = 0 do not determine kappa: their error is inf in the maps already
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
+        fit = fit_dolp(np.moveaxis(y, 0, -1), thetas, thetas, sigma=sigma)
     return PixelMaps(fit.n, fit.kappa, fit.errors)
 
 
