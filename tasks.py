@@ -50,7 +50,9 @@ def demo(args) -> int:
     ensure_env("")
     out = ROOT / "results" / "characterize"
     workers = str(os.cpu_count() or 1)
-    return _run(BIN / "scatterlab", "characterize", "--out", out, "--force", "--workers", workers, *args)
+    return _run(
+        BIN / "scatterlab", "characterize", "--out", out, "--force", "--workers", workers, *args
+    )
 
 
 def test(args) -> int:
@@ -59,7 +61,9 @@ def test(args) -> int:
     env = dict(os.environ, MPLBACKEND="Agg", SCATTERLAB_PROGRESS="0")
     for check in (("check", "."), ("format", "--check", ".")):
         if _run(BIN / "ruff", *check) != 0:
-            print(f"ruff {check[0]} failed: run `.venv/bin/ruff {' '.join(check)}` (format: `ruff format .`)")
+            print(
+                f"ruff {check[0]} failed: run `.venv/bin/ruff {' '.join(check)}` (format: `ruff format .`)"
+            )
             return 1
     return _run(PY, "-m", "pytest", "-q", *args, env=env)
 

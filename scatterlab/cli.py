@@ -39,7 +39,9 @@ def _study(args) -> int:
             print(f"{sid:24s} {st.title}  [{st.reproduces}]")
         return 0
     if args.seed is not None and args.seed < 0:
-        print(f"scatterlab: --seed must be a non-negative integer, got {args.seed}", file=sys.stderr)
+        print(
+            f"scatterlab: --seed must be a non-negative integer, got {args.seed}", file=sys.stderr
+        )
         return 2
     if not args.id:
         print("scatterlab study run: give a study ID or 'all'", file=sys.stderr)
@@ -47,15 +49,17 @@ def _study(args) -> int:
     ex = _executor(args)
     try:
         if args.id == "all":
-            index, status = studies.run_all(args.out, quick=args.quick, seed=args.seed, force=True,
-                                            executor=ex)
+            index, status = studies.run_all(
+                args.out, quick=args.quick, seed=args.seed, force=True, executor=ex
+            )
             failed = {k: v for k, v in status.items() if v != "ok"}
             print(f"index: {index}")
             for k, v in failed.items():
                 print(f"FAILED {k}: {v}", file=sys.stderr)
             return 1 if failed else 0
-        report = studies.run_study(args.id, args.out, quick=args.quick, seed=args.seed, force=args.force,
-                                   executor=ex)
+        report = studies.run_study(
+            args.id, args.out, quick=args.quick, seed=args.seed, force=args.force, executor=ex
+        )
         print(f"report: {report}")
         return 0
     except (ValueError, FileExistsError) as exc:
@@ -128,7 +132,11 @@ def _characterize(args) -> int:
         print(f"scatterlab: {exc}", file=sys.stderr)
         return 2
     if args.quick:  # a small, fast version of the same scene (tests, smoke runs)
-        cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = 64, cfg.geometry_deg[::3], cfg.d_over_r0[:1]
+        cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = (
+            64,
+            cfg.geometry_deg[::3],
+            cfg.d_over_r0[:1],
+        )
         cfg.iterations, cfg.posterior_steps = 15, 400
     return _report(args, lambda ex: characterize(cfg, args.out, overwrite=args.force, executor=ex))
 
@@ -137,12 +145,24 @@ def _analyze(args) -> int:
     from scatterlab.characterization.analysis import AnalyzeSettings, analyze
 
     if args.seed < 0:
-        print(f"scatterlab: --seed must be a non-negative integer, got {args.seed}", file=sys.stderr)
+        print(
+            f"scatterlab: --seed must be a non-negative integer, got {args.seed}", file=sys.stderr
+        )
         return 2
-    settings = AnalyzeSettings(psf=args.psf, iterations=args.iterations, priors=args.priors, sigma=args.sigma,
-                               posterior_steps=args.posterior_steps, seed=args.seed)
-    return _report(args, lambda ex: analyze(args.dataset, args.out, settings=settings, overwrite=args.force,
-                                            executor=ex))
+    settings = AnalyzeSettings(
+        psf=args.psf,
+        iterations=args.iterations,
+        priors=args.priors,
+        sigma=args.sigma,
+        posterior_steps=args.posterior_steps,
+        seed=args.seed,
+    )
+    return _report(
+        args,
+        lambda ex: analyze(
+            args.dataset, args.out, settings=settings, overwrite=args.force, executor=ex
+        ),
+    )
 
 
 def _fit_mueller(args) -> int:
@@ -261,33 +281,55 @@ def main(argv=None) -> int:
     sub = parser.add_subparsers(
         dest="command", required=True, metavar="COMMAND", help=argparse.SUPPRESS
     )
-    st = sub.add_parser("study", help="list or run the studies that reproduce the reference figures")
+    st = sub.add_parser(
+        "study", help="list or run the studies that reproduce the reference figures"
+    )
     st.add_argument("action", choices=["list", "run"])
     st.add_argument("id", nargs="?", help="study id, or 'all'")
     st.add_argument("--quick", action="store_true", help="small sizes (under a minute per study)")
     st.add_argument("--out", default=None, help="output folder (default results/[quick/]ID)")
-    st.add_argument("--seed", type=int, default=20101210, help="random seed recorded in metrics.json")
+    st.add_argument(
+        "--seed", type=int, default=20101210, help="random seed recorded in metrics.json"
+    )
     st.add_argument("--force", action="store_true", help="replace an existing report")
     st.add_argument("--workers", type=int, default=None, help="local worker processes for sweeps")
     st.add_argument("--scheduler", default=None, help="Dask scheduler address for sweeps")
-    ch = sub.add_parser("characterize", help="simulate, deconvolve, classify and characterize a scene (main job)")
-    ch.add_argument("scene", nargs="?", help="scene description (TOML); default: the bundled painted plates")
+    ch = sub.add_parser(
+        "characterize", help="simulate, deconvolve, classify and characterize a scene (main job)"
+    )
+    ch.add_argument(
+        "scene", nargs="?", help="scene description (TOML); default: the bundled painted plates"
+    )
     ch.add_argument("--out", default="results/characterize", help="output folder")
     ch.add_argument("--force", action="store_true", help="replace an existing report")
-    ch.add_argument("--quick", action="store_true", help="smaller images, fewer geometries and iterations")
+    ch.add_argument(
+        "--quick", action="store_true", help="smaller images, fewer geometries and iterations"
+    )
     ch.add_argument("--workers", type=int, default=None, help="local worker processes")
     ch.add_argument("--scheduler", default=None, help="Dask scheduler address")
     _add_fit_mueller(sub)
-    an = sub.add_parser("analyze", help="restore, classify and invert measured channel images (no simulation)")
-    an.add_argument("dataset", help="polarimetric dataset: .h5, .npz, or a TIFF stack with its sidecar .toml")
+    an = sub.add_parser(
+        "analyze", help="restore, classify and invert measured channel images (no simulation)"
+    )
+    an.add_argument(
+        "dataset", help="polarimetric dataset: .h5, .npz, or a TIFF stack with its sidecar .toml"
+    )
     an.add_argument("--out", default="results/analyze", help="output folder")
     an.add_argument("--force", action="store_true", help="replace an existing report")
-    an.add_argument("--psf", choices=["blind", "diffraction"], default="blind",
-                    help="blind deconvolution (through turbulence) or the optics' known diffraction PSF")
+    an.add_argument(
+        "--psf",
+        choices=["blind", "diffraction"],
+        default="blind",
+        help="blind deconvolution (through turbulence) or the optics' known diffraction PSF",
+    )
     an.add_argument("--iterations", type=int, default=150, help="EM iterations (default 150)")
     an.add_argument("--priors", choices=["ch5", "ch6", "ch7"], default="ch7", help="DOLP prior set")
-    an.add_argument("--sigma", type=float, default=0.3, help="known roughness (rms facet slope, default 0.3)")
-    an.add_argument("--posterior-steps", type=int, default=1500, help="MCMC chain length (default 1500)")
+    an.add_argument(
+        "--sigma", type=float, default=0.3, help="known roughness (rms facet slope, default 0.3)"
+    )
+    an.add_argument(
+        "--posterior-steps", type=int, default=1500, help="MCMC chain length (default 1500)"
+    )
     an.add_argument("--seed", type=int, default=20101210, help="random seed (default 20101210)")
     an.add_argument("--workers", type=int, default=None, help="local worker processes")
     an.add_argument("--scheduler", default=None, help="Dask scheduler address")

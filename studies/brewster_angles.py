@@ -10,8 +10,11 @@ import numpy as np
 
 from scatterlab import fresnel, materials
 
-STUDY = {"id": "brewster", "title": "Brewster and pseudo-Brewster angles of the catalogue materials",
-         "reproduces": "own study (Eq. 85 and the pseudo-Brewster angle of Sec. 3.1.1)"}
+STUDY = {
+    "id": "brewster",
+    "title": "Brewster and pseudo-Brewster angles of the catalogue materials",
+    "reproduces": "own study (Eq. 85 and the pseudo-Brewster angle of Sec. 3.1.1)",
+}
 
 WAVELENGTHS = (1.064e-6, 1.55e-6)
 
@@ -34,9 +37,18 @@ def run(ctx):
                     angle = float(fresnel.pseudo_brewster_angle(eta))
                     kind = "pseudo-Brewster"
                 rp_min = float(fresnel.reflectances(eta, angle)[1])
-                rows.append({"material": name, "wavelength_um": wl * 1e6, "n": eta.real, "kappa": -eta.imag,
-                             "kind": kind, "angle_deg": np.degrees(angle), "Rp_min": rp_min,
-                             "source": mat.source})
+                rows.append(
+                    {
+                        "material": name,
+                        "wavelength_um": wl * 1e6,
+                        "n": eta.real,
+                        "kappa": -eta.imag,
+                        "kind": kind,
+                        "angle_deg": np.degrees(angle),
+                        "Rp_min": rp_min,
+                        "source": mat.source,
+                    }
+                )
     ctx.metrics["table"] = rows
     import matplotlib
 
@@ -53,13 +65,21 @@ def run(ctx):
     ax.legend()
     ctx.save_figure(fig, "brewster")
     ctx.metrics["max_Rp_at_brewster_lossless"] = max(
-        (r["Rp_min"] for r in rows if r["kind"] == "Brewster"), default=0.0)
-    lines = ["| material | lambda [um] | n | kappa | angle | angle [deg] | R_p there |", "|---|---|---|---|---|---|---|"]
+        (r["Rp_min"] for r in rows if r["kind"] == "Brewster"), default=0.0
+    )
+    lines = [
+        "| material | lambda [um] | n | kappa | angle | angle [deg] | R_p there |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
-        lines.append(f"| {r['material']} | {r['wavelength_um']:.3f} | {r['n']:.4f} | {r['kappa']:.4f} | "
-                     f"{r['kind']} | {r['angle_deg']:.3f} | {r['Rp_min']:.2e} |")
+        lines.append(
+            f"| {r['material']} | {r['wavelength_um']:.3f} | {r['n']:.4f} | {r['kappa']:.4f} | "
+            f"{r['kind']} | {r['angle_deg']:.3f} | {r['Rp_min']:.2e} |"
+        )
     ctx.say("\n".join(lines))
-    ctx.say("For the lossless dielectrics R_p vanishes at arctan(n) to rounding "
-            f"(largest R_p there: {ctx.metrics['max_Rp_at_brewster_lossless']:.1e}). For metals the "
-            "pseudo-Brewster angle lies close to grazing and R_p stays large, which is why specular DOLP "
-            "separates metals from dielectrics (Ch. V). Data sources are listed in metrics.json.")
+    ctx.say(
+        "For the lossless dielectrics R_p vanishes at arctan(n) to rounding "
+        f"(largest R_p there: {ctx.metrics['max_Rp_at_brewster_lossless']:.1e}). For metals the "
+        "pseudo-Brewster angle lies close to grazing and R_p stays large, which is why specular DOLP "
+        "separates metals from dielectrics (Ch. V). Data sources are listed in metrics.json."
+    )

@@ -14,11 +14,19 @@ import numpy as np
 
 from scatterlab.characterization import Plate, default_scene, run_plate
 
-STUDY = {"id": "characterization_coverage", "title": "Coverage of the characterization posteriors",
-         "reproduces": "ours (issue: honest uncertainty of the main job)"}
+STUDY = {
+    "id": "characterization_coverage",
+    "title": "Coverage of the characterization posteriors",
+    "reproduces": "ours (issue: honest uncertainty of the main job)",
+}
 
-METALS = {"aluminium": (1.44, 16.0), "iron": (3.60, 5.88), "copper": (0.61, 10.4), "gold": (0.52, 10.7),
-          "titanium": (3.69, 4.59)}
+METALS = {
+    "aluminium": (1.44, 16.0),
+    "iron": (3.60, 5.88),
+    "copper": (0.61, 10.4),
+    "gold": (0.52, 10.7),
+    "titanium": (3.69, 4.59),
+}
 KINDS = ("no_turbulence", "D_r0_7.9_corrected")
 LEVELS = {"ci68": 0.68, "ci95": 0.95}
 
@@ -50,8 +58,12 @@ def _trial(task):
             for q in ("n", "kappa"):
                 e = post[q]
                 out[f"{key}/{'metal' if region == name else 'paint'}/{q}"] = {
-                    "ci68": bool(e["covers68"]), "ci95": bool(e["covers95"]), "median": e["median"],
-                    "truth": e["truth"], "converged": bool(post["converged"])}
+                    "ci68": bool(e["covers68"]),
+                    "ci95": bool(e["covers95"]),
+                    "median": e["median"],
+                    "truth": e["truth"],
+                    "converged": bool(post["converged"]),
+                }
     return out
 
 
@@ -66,8 +78,12 @@ def coverage(trials) -> dict:
         for level, nominal in LEVELS.items():
             rate = float(np.mean([t[k][level] for t in trials]))
             se = float(np.sqrt(nominal * (1 - nominal) / N))
-            row[level] = {"rate": rate, "nominal": nominal, "binomial_se": se,
-                          "within_2se": bool(abs(rate - nominal) <= 2 * se)}
+            row[level] = {
+                "rate": rate,
+                "nominal": nominal,
+                "binomial_se": se,
+                "within_2se": bool(abs(rate - nominal) <= 2 * se),
+            }
         out[k] = row
     return out
 
@@ -82,20 +98,29 @@ def run(ctx):
     ctx.metrics["coverage"] = cov
     ctx.metrics["trials"] = trials
     _figure(ctx, cov)
-    lines = ["| image / region / parameter | 68 % coverage | 95 % coverage | within 2 binomial SE |",
-             "|---|---|---|---|"]
+    lines = [
+        "| image / region / parameter | 68 % coverage | 95 % coverage | within 2 binomial SE |",
+        "|---|---|---|---|",
+    ]
     for k, row in cov.items():
         ok = "yes" if all(r["within_2se"] for r in row.values()) else "**no**"
         lines.append(f"| {k} | {row['ci68']['rate']:.2f} | {row['ci95']['rate']:.2f} | {ok} |")
     bad = [k for k, row in cov.items() if not all(r["within_2se"] for r in row.values())]
     se68 = cov[next(iter(cov))]["ci68"]["binomial_se"]
-    verdict = ("not judged in quick mode (too few trials)" if ctx.quick else
-               "all intervals cover at their nominal rates within two binomial standard errors"
-               if not bad else f"**{len(bad)} of {len(cov)} interval families miss their nominal rate by more "
-               f"than two binomial standard errors: {', '.join(bad)}**")
-    ctx.say(f"{n_seeds} independent seeds (scene, screen, noise, materials); binomial standard error of a 68 % "
-            f"rate over {n_seeds} trials: {se68:.3f}.\n\n" + "\n".join(lines)
-            + f"\n\nVerdict: {verdict}.")
+    verdict = (
+        "not judged in quick mode (too few trials)"
+        if ctx.quick
+        else "all intervals cover at their nominal rates within two binomial standard errors"
+        if not bad
+        else f"**{len(bad)} of {len(cov)} interval families miss their nominal rate by more "
+        f"than two binomial standard errors: {', '.join(bad)}**"
+    )
+    ctx.say(
+        f"{n_seeds} independent seeds (scene, screen, noise, materials); binomial standard error of a 68 % "
+        f"rate over {n_seeds} trials: {se68:.3f}.\n\n"
+        + "\n".join(lines)
+        + f"\n\nVerdict: {verdict}."
+    )
 
 
 def _figure(ctx, cov):
@@ -111,10 +136,17 @@ def _figure(ctx, cov):
         nominal = cov[keys[0]][level]["nominal"]
         se = cov[keys[0]][level]["binomial_se"]
         ax.errorbar(x + off, rates, fmt=marker, label=f"{level[2:]} % interval")
-        ax.axhspan(nominal - 2 * se, nominal + 2 * se, alpha=0.15, color="C0" if level == "ci68" else "C1")
+        ax.axhspan(
+            nominal - 2 * se, nominal + 2 * se, alpha=0.15, color="C0" if level == "ci68" else "C1"
+        )
         ax.axhline(nominal, ls=":", color="k", lw=0.8)
-    ax.set_xticks(x, [k.replace("D_r0_7.9_", "") for k in keys], rotation=30, ha="right", fontsize=7)
-    ax.set(ylabel="fraction of trials covering the truth", ylim=(0, 1.05),
-           title="Coverage of the region posteriors (bands: nominal +- 2 binomial SE)")
+    ax.set_xticks(
+        x, [k.replace("D_r0_7.9_", "") for k in keys], rotation=30, ha="right", fontsize=7
+    )
+    ax.set(
+        ylabel="fraction of trials covering the truth",
+        ylim=(0, 1.05),
+        title="Coverage of the region posteriors (bands: nominal +- 2 binomial SE)",
+    )
     ax.legend(fontsize=8)
     ctx.save_figure(fig, "coverage")

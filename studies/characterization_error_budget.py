@@ -17,8 +17,11 @@ from scatterlab.characterization import Ideal, default_scene, run_plate
 from scatterlab.characterization.estimation import default_margin, region_data
 from scatterlab.characterization.pipeline import interior
 
-STUDY = {"id": "characterization_error_budget", "title": "Error budget of the characterization pipeline",
-         "reproduces": "ours (issue: the main job's accuracy), scene of Tables 4-5"}
+STUDY = {
+    "id": "characterization_error_budget",
+    "title": "Error budget of the characterization pipeline",
+    "reproduces": "ours (issue: the main job's accuracy), scene of Tables 4-5",
+}
 
 VARIANTS = {
     "realistic": Ideal(),
@@ -28,7 +31,9 @@ VARIANTS = {
     "true PSF": Ideal(psf=True),
     "perfect registration": Ideal(registration=True),
     "true classes": Ideal(classes=True),
-    "all ideal (model only)": Ideal(noise=True, optics=True, foreshortening=True, psf=True, registration=True),
+    "all ideal (model only)": Ideal(
+        noise=True, optics=True, foreshortening=True, psf=True, registration=True
+    ),
 }
 
 
@@ -53,7 +58,10 @@ def _region_fit_errors(result, key, case, kind, cfg):
     margin = default_margin(thetas.max())
     out = {}
     p = result.plate
-    for region, truth in (("paint", (p.paint_n, p.paint_kappa)), ("metal", (p.metal_n, p.metal_kappa))):
+    for region, truth in (
+        ("paint", (p.paint_n, p.paint_kappa)),
+        ("metal", (p.metal_n, p.metal_kappa)),
+    ):
         d = region_data(region, stack, result.labels, sel, margin, thetas, truth)
         f = fit_dolp(d.mean, thetas, thetas, sigma=cfg.sigma_known)
         out[region] = float(np.hypot(float(f.n) - truth[0], float(f.kappa) - truth[1]))
@@ -67,14 +75,28 @@ def run(ctx):
     rows = {}
     for name, ideal in VARIANTS.items():
         with ctx.step(name):
-            res = run_plate(cfg.plates[0], cfg, np.random.default_rng(cfg.seed), executor=ctx.executor,
-                            ideal=ideal)
+            res = run_plate(
+                cfg.plates[0],
+                cfg,
+                np.random.default_rng(cfg.seed),
+                executor=ctx.executor,
+                ideal=ideal,
+            )
         rows[name] = {}
         for key, case, kind in image_kinds(cfg):
             m = res.metrics[key]
-            entry = {"dolp_rmse_truth": m["dolp_rmse_truth"],
-                     "classification_vs_labels": m.get("classification_vs_labels", {}).get("total_error")}
-            entry.update({f"{r}_index_error": v for r, v in _region_fit_errors(res, key, case, kind, cfg).items()})
+            entry = {
+                "dolp_rmse_truth": m["dolp_rmse_truth"],
+                "classification_vs_labels": m.get("classification_vs_labels", {}).get(
+                    "total_error"
+                ),
+            }
+            entry.update(
+                {
+                    f"{r}_index_error": v
+                    for r, v in _region_fit_errors(res, key, case, kind, cfg).items()
+                }
+            )
             rows[name][key] = entry
     ctx.metrics["variants"] = rows
     keys = [k for k, _, _ in image_kinds(cfg)]
@@ -88,15 +110,22 @@ def _figure(ctx, rows, keys):
     plt = headless_pyplot()
 
     names = list(rows)
-    quantities = [("dolp_rmse_truth", "DOLP RMSE vs truth"), ("classification_vs_labels", "class error vs labels"),
-                  ("paint_index_error", "paint |eta error| (region fit)"),
-                  ("metal_index_error", "metal |eta error| (region fit)")]
-    fig, axes = plt.subplots(1, len(quantities), figsize=(4.2 * len(quantities), 4.5), layout="constrained")
+    quantities = [
+        ("dolp_rmse_truth", "DOLP RMSE vs truth"),
+        ("classification_vs_labels", "class error vs labels"),
+        ("paint_index_error", "paint |eta error| (region fit)"),
+        ("metal_index_error", "metal |eta error| (region fit)"),
+    ]
+    fig, axes = plt.subplots(
+        1, len(quantities), figsize=(4.2 * len(quantities), 4.5), layout="constrained"
+    )
     y = np.arange(len(names))
     for ax, (q, label) in zip(axes, quantities):
         for j, key in enumerate(keys):
             vals = [rows[n][key][q] if rows[n][key][q] is not None else np.nan for n in names]
-            ax.barh(y + (j - len(keys) / 2) * 0.8 / len(keys), vals, height=0.8 / len(keys), label=key)
+            ax.barh(
+                y + (j - len(keys) / 2) * 0.8 / len(keys), vals, height=0.8 / len(keys), label=key
+            )
         ax.set_yticks(y, names if ax is axes[0] else [""] * len(names), fontsize=8)
         ax.invert_yaxis()
         ax.set_xlabel(label)
@@ -107,31 +136,59 @@ def _figure(ctx, rows, keys):
 
 def _table(ctx, rows, keys):
     names = list(rows)
-    lines = ["| stage made ideal | image | DOLP RMSE vs truth | class error vs labels | paint abs(eta error) | "
-             "metal abs(eta error) |", "|---|---|---|---|---|---|"]
+    lines = [
+        "| stage made ideal | image | DOLP RMSE vs truth | class error vs labels | paint abs(eta error) | "
+        "metal abs(eta error) |",
+        "|---|---|---|---|---|---|",
+    ]
     for n in names:
         for key in keys:
             e = rows[n][key]
-            c = "-" if e["classification_vs_labels"] is None else f"{e['classification_vs_labels']:.3f}"
-            lines.append(f"| {n} | {key} | {e['dolp_rmse_truth']:.3f} | {c} | {e['paint_index_error']:.3f} | "
-                         f"{e['metal_index_error']:.3f} |")
+            c = (
+                "-"
+                if e["classification_vs_labels"] is None
+                else f"{e['classification_vs_labels']:.3f}"
+            )
+            lines.append(
+                f"| {n} | {key} | {e['dolp_rmse_truth']:.3f} | {c} | {e['paint_index_error']:.3f} | "
+                f"{e['metal_index_error']:.3f} |"
+            )
     ctx.say("\n".join(lines))
     # attribution: the fall of each error when one stage alone is ideal, for the worst image kind
     base = rows["realistic"]
     summary = []
     for q in ("dolp_rmse_truth", "paint_index_error", "metal_index_error"):
         for key in keys:
-            falls = {n: base[key][q] - rows[n][key][q] for n in names if n not in ("realistic",)
-                     and not n.startswith("all") and rows[n][key][q] is not None}
+            falls = {
+                n: base[key][q] - rows[n][key][q]
+                for n in names
+                if n not in ("realistic",)
+                and not n.startswith("all")
+                and rows[n][key][q] is not None
+            }
             top = max(falls, key=falls.get)
-            summary.append({"quantity": q, "image": key, "largest_source": top, "fall": falls[top],
-                            "realistic": base[key][q], "model_only": rows["all ideal (model only)"][key][q]})
+            summary.append(
+                {
+                    "quantity": q,
+                    "image": key,
+                    "largest_source": top,
+                    "fall": falls[top],
+                    "realistic": base[key][q],
+                    "model_only": rows["all ideal (model only)"][key][q],
+                }
+            )
     ctx.metrics["largest_sources"] = summary
     worst = max(summary, key=lambda s: s["fall"])
-    ctx.say("Largest single source, per quantity and image (the fall of the error when that stage alone is "
-            "ideal):\n\n" + "\n".join(f"- {s['quantity']}, {s['image']}: **{s['largest_source']}** "
-                                      f"({s['realistic']:.3f} -> {s['realistic'] - s['fall']:.3f}; model only "
-                                      f"{s['model_only']:.3f})" for s in summary)
-            + f"\n\nOverall the largest remaining error source is **{worst['largest_source']}**: it accounts "
-            f"for {worst['fall']:.3f} of the {worst['quantity']} of the {worst['image']} image "
-            f"({worst['realistic']:.3f} in the realistic pipeline).")
+    ctx.say(
+        "Largest single source, per quantity and image (the fall of the error when that stage alone is "
+        "ideal):\n\n"
+        + "\n".join(
+            f"- {s['quantity']}, {s['image']}: **{s['largest_source']}** "
+            f"({s['realistic']:.3f} -> {s['realistic'] - s['fall']:.3f}; model only "
+            f"{s['model_only']:.3f})"
+            for s in summary
+        )
+        + f"\n\nOverall the largest remaining error source is **{worst['largest_source']}**: it accounts "
+        f"for {worst['fall']:.3f} of the {worst['quantity']} of the {worst['image']} image "
+        f"({worst['realistic']:.3f} in the realistic pipeline)."
+    )

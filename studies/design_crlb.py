@@ -9,10 +9,18 @@ import numpy as np
 from scatterlab.inversion import crlb
 from scatterlab.plotting import headless_pyplot as plt
 
-STUDY = {"id": "design", "title": "Cramer-Rao bounds of n, kappa, sigma against the measurement geometry",
-         "reproduces": "Sec. 7.3 remark on Fig. 58 (off-specular sweeps to determine sigma)"}
+STUDY = {
+    "id": "design",
+    "title": "Cramer-Rao bounds of n, kappa, sigma against the measurement geometry",
+    "reproduces": "Sec. 7.3 remark on Fig. 58 (off-specular sweeps to determine sigma)",
+}
 
-MATERIALS = {"glass": (1.5, 0.0), "paint": (1.39, 0.34), "iron": (3.6, 5.88), "aluminium": (1.44, 16.0)}
+MATERIALS = {
+    "glass": (1.5, 0.0),
+    "paint": (1.39, 0.34),
+    "iron": (3.6, 5.88),
+    "aluminium": (1.44, 16.0),
+}
 NOISE = 1e-3
 
 
@@ -27,12 +35,22 @@ def run(ctx):
             b_spec = crlb(n, k, sig, spec, spec, NOISE)
             b_off = crlb(n, k, sig, off_i, off_r, NOISE)
             for j, ax in enumerate(axes):
-                line, = ax.loglog(sig, b_spec[:, j], "-", label=f"{name}, specular 30-60")
-                ax.loglog(sig, b_off[:, j], "--", color=line.get_color(), label=f"{name}, 45 / 20-80")
+                (line,) = ax.loglog(sig, b_spec[:, j], "-", label=f"{name}, specular 30-60")
+                ax.loglog(
+                    sig, b_off[:, j], "--", color=line.get_color(), label=f"{name}, 45 / 20-80"
+                )
             i1 = np.argmin(np.abs(sig - 0.1))
-            ctx.metrics[name] = {"sigma_bound_at_0.1": {"specular": float(b_spec[i1, 2]), "off": float(b_off[i1, 2])},
-                                 "n_bound_at_0.1": {"specular": float(b_spec[i1, 0]), "off": float(b_off[i1, 0])},
-                                 "kappa_bound_at_0.1": {"specular": float(b_spec[i1, 1]), "off": float(b_off[i1, 1])}}
+            ctx.metrics[name] = {
+                "sigma_bound_at_0.1": {
+                    "specular": float(b_spec[i1, 2]),
+                    "off": float(b_off[i1, 2]),
+                },
+                "n_bound_at_0.1": {"specular": float(b_spec[i1, 0]), "off": float(b_off[i1, 0])},
+                "kappa_bound_at_0.1": {
+                    "specular": float(b_spec[i1, 1]),
+                    "off": float(b_off[i1, 1]),
+                },
+            }
     for ax, par in zip(axes, ("n", "kappa", "sigma")):
         ax.set(xlabel=r"true $\sigma$", ylabel=f"CRLB of {par} (noise {NOISE})", title=par)
         ax.set_ylim(1e-5, 1e3)
@@ -46,25 +64,36 @@ def run(ctx):
         for i, a in enumerate(grid):
             for j, b in enumerate(grid):
                 if b - a >= 10:
-                    M[i, j] = crlb(3.6, 5.88, 0.1, np.full(7, np.radians(45)), np.radians(np.linspace(a, b, 7)),
-                                   NOISE)[2]
+                    M[i, j] = crlb(
+                        3.6,
+                        5.88,
+                        0.1,
+                        np.full(7, np.radians(45)),
+                        np.radians(np.linspace(a, b, 7)),
+                        NOISE,
+                    )[2]
     fig, ax = pyplot.subplots(figsize=(5.5, 4.5))
     im = ax.pcolormesh(grid, grid, np.log10(M).T, shading="nearest", cmap="viridis")
     fig.colorbar(im, label=r"log10 CRLB of $\sigma$")
-    ax.set(xlabel=r"first $\theta_r$ [deg]", ylabel=r"last $\theta_r$ [deg]",
-           title=r"iron, $\sigma$ = 0.1, $\theta_i$ = 45 deg, 7 angles")
+    ax.set(
+        xlabel=r"first $\theta_r$ [deg]",
+        ylabel=r"last $\theta_r$ [deg]",
+        title=r"iron, $\sigma$ = 0.1, $\theta_i$ = 45 deg, 7 angles",
+    )
     ctx.save_figure(fig, "crlb_map")
     best = np.unravel_index(np.nanargmin(M), M.shape)
     ctx.metrics["best_sweep_deg"] = [float(grid[best[0]]), float(grid[best[1]])]
     ctx.metrics["best_sweep_sigma_bound"] = float(np.nanmin(M))
     m = ctx.metrics
-    ctx.say("At sigma = 0.1 the bound on sigma from specular angles 30-60 deg is "
-            f"{m['iron']['sigma_bound_at_0.1']['specular']:.3g} for iron and "
-            f"{m['paint']['sigma_bound_at_0.1']['specular']:.3g} for paint, against "
-            f"{m['iron']['sigma_bound_at_0.1']['off']:.3g} and {m['paint']['sigma_bound_at_0.1']['off']:.3g} from a "
-            "theta_r sweep 20-80 deg at theta_i = 45 deg: the reference's remark holds for smooth surfaces, where "
-            "the specular DOLP is almost independent of sigma. For rough surfaces (sigma >~ 0.3) the diffuse share "
-            "makes the specular DOLP itself sensitive to sigma and the two designs become comparable. Glass's kappa "
-            "bound is infinite at kappa = 0 (the DOLP is stationary there). The best 7-angle theta_r sweep for "
-            f"iron at sigma = 0.1 spans {m['best_sweep_deg'][0]:.0f}-{m['best_sweep_deg'][1]:.0f} deg "
-            f"(bound {m['best_sweep_sigma_bound']:.2g}).")
+    ctx.say(
+        "At sigma = 0.1 the bound on sigma from specular angles 30-60 deg is "
+        f"{m['iron']['sigma_bound_at_0.1']['specular']:.3g} for iron and "
+        f"{m['paint']['sigma_bound_at_0.1']['specular']:.3g} for paint, against "
+        f"{m['iron']['sigma_bound_at_0.1']['off']:.3g} and {m['paint']['sigma_bound_at_0.1']['off']:.3g} from a "
+        "theta_r sweep 20-80 deg at theta_i = 45 deg: the reference's remark holds for smooth surfaces, where "
+        "the specular DOLP is almost independent of sigma. For rough surfaces (sigma >~ 0.3) the diffuse share "
+        "makes the specular DOLP itself sensitive to sigma and the two designs become comparable. Glass's kappa "
+        "bound is infinite at kappa = 0 (the DOLP is stationary there). The best 7-angle theta_r sweep for "
+        f"iron at sigma = 0.1 spans {m['best_sweep_deg'][0]:.0f}-{m['best_sweep_deg'][1]:.0f} deg "
+        f"(bound {m['best_sweep_sigma_bound']:.2g})."
+    )

@@ -2,14 +2,17 @@
 uncalibrated (nominal design W, A) instruments (own study, Sec. 4.4 / Ref. 25)."""
 
 import numpy as np
+from scatterlab.studies._common import calibrate, imperfect_1064_instrument
 
 from scatterlab.ellipsometry import switched_wave_plate_psa, switched_wave_plate_psg
 from scatterlab.plotting import headless_pyplot as plt
 from scatterlab.polarization import diattenuator, linear_retarder
-from scatterlab.studies._common import calibrate, imperfect_1064_instrument
 
-STUDY = {"id": "ecm_noise", "title": "Mueller error vs noise: ECM, ideal and uncalibrated instruments",
-         "reproduces": "own study (ECM, Ref. 25)"}
+STUDY = {
+    "id": "ecm_noise",
+    "title": "Mueller error vs noise: ECM, ideal and uncalibrated instruments",
+    "reproduces": "own study (ECM, Ref. 25)",
+}
 
 
 def run(ctx):
@@ -19,7 +22,10 @@ def run(ctx):
     noises = np.logspace(-5, -1, 5 if ctx.quick else 9)
     trials = 5 if ctx.quick else 40
     Ainv_true, Winv_true = np.linalg.inv(inst.A), np.linalg.inv(inst.W)
-    Ainv_nom, Winv_nom = np.linalg.inv(switched_wave_plate_psa()), np.linalg.inv(switched_wave_plate_psg())
+    Ainv_nom, Winv_nom = (
+        np.linalg.inv(switched_wave_plate_psa()),
+        np.linalg.inv(switched_wave_plate_psg()),
+    )
     rms = {"ECM": [], "true W, A": [], "nominal W, A": []}
     with ctx.step("sweep"):
         for noise in noises:
@@ -36,19 +42,31 @@ def run(ctx):
     fig, ax = pyplot.subplots(figsize=(6, 4))
     for k, v in rms.items():
         ax.loglog(noises, v, "o-", label=k)
-    ax.set(xlabel="noise (fraction of each reading)", ylabel="RMS Mueller element error", title="ECM vs noise")
+    ax.set(
+        xlabel="noise (fraction of each reading)",
+        ylabel="RMS Mueller element error",
+        title="ECM vs noise",
+    )
     ax.legend()
     ctx.save_figure(fig, "ecm_noise")
     ratio = np.array(rms["ECM"]) / np.array(rms["true W, A"])
     slope = float(np.polyfit(np.log(noises), np.log(rms["ECM"]), 1)[0])
-    ctx.metrics.update({"noise": noises, "rms_error": rms, "ecm_over_floor": ratio, "trials": trials,
-                        "ecm_error_vs_noise_slope": slope})
+    ctx.metrics.update(
+        {
+            "noise": noises,
+            "rms_error": rms,
+            "ecm_over_floor": ratio,
+            "trials": trials,
+            "ecm_error_vs_noise_slope": slope,
+        }
+    )
     moderate = noises <= 0.031
     ctx.say(
         f"ECM stays within a factor {ratio[moderate].min():.2f}-{ratio[moderate].max():.2f} of the calibration-free "
         f"floor (true W and A) for noise from {noises[0]:.0e} to {noises[moderate][-1]:.0e} (the issue asks for at "
         f"most 1.5); at {noises[-1]:.0e} noise the ratio is {ratio[-1]:.2f}, where the eigenvalue estimates are no "
-        f"longer linear in the noise. Log-log slope of the ECM error: {slope:.2f}; {trials} trials per level. Using the nominal "
+        f"longer linear in the noise. Log-log slope of the ECM error: {slope:.2f}; {trials} trials "
+        f"per level. Using the nominal "
         f"design matrices leaves a systematic error of {rms['nominal W, A'][0]:.1e} that no amount of averaging "
         "removes: the retardance and azimuth errors of the wave plates and the polarizers' extinction."
     )

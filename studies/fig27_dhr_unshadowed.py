@@ -7,13 +7,16 @@ per-axis rms slope sigma = tan(n deg).
 """
 
 import numpy as np
+from scatterlab.studies._common import rms_slope_from_degrees
 
 from scatterlab.pbrdf import dhr_beckmann, dhr_sphere_unshadowed
 from scatterlab.plotting import headless_pyplot as plt
-from scatterlab.studies._common import rms_slope_from_degrees
 
-STUDY = {"id": "fig27", "title": "DHR of the unshadowed Priest-Germer pBRDF (PEC)",
-         "reproduces": "Fig. 27 (Sec. 3.2.3)"}
+STUDY = {
+    "id": "fig27",
+    "title": "DHR of the unshadowed Priest-Germer pBRDF (PEC)",
+    "reproduces": "Fig. 27 (Sec. 3.2.3)",
+}
 
 
 def run(ctx):
@@ -27,17 +30,34 @@ def run(ctx):
             sphere = dhr_sphere_unshadowed(theta, sigma)
         with ctx.step(f"hemisphere_{deg}deg"):
             hemi = dhr_beckmann(theta, sigma, "none")
-        line, = ax.plot(np.degrees(theta), sphere, label=f"{deg} deg, whole sphere")
-        ax.plot(np.degrees(theta), hemi, "--", color=line.get_color(), label=f"{deg} deg, upper hemisphere")
+        (line,) = ax.plot(np.degrees(theta), sphere, label=f"{deg} deg, whole sphere")
+        ax.plot(
+            np.degrees(theta),
+            hemi,
+            "--",
+            color=line.get_color(),
+            label=f"{deg} deg, upper hemisphere",
+        )
         above = theta[sphere > 1.01]
         ctx.metrics[f"sigma_{deg}deg"] = sigma
-        ctx.metrics[f"dhr_sphere_at_60deg_{deg}deg"] = float(dhr_sphere_unshadowed(np.radians(60), sigma))
-        ctx.metrics[f"dhr_sphere_at_85deg_{deg}deg"] = float(dhr_sphere_unshadowed(np.radians(85), sigma))
-        ctx.metrics[f"angle_dhr_exceeds_1.01_{deg}deg"] = float(np.degrees(above[0])) if above.size else None
+        ctx.metrics[f"dhr_sphere_at_60deg_{deg}deg"] = float(
+            dhr_sphere_unshadowed(np.radians(60), sigma)
+        )
+        ctx.metrics[f"dhr_sphere_at_85deg_{deg}deg"] = float(
+            dhr_sphere_unshadowed(np.radians(85), sigma)
+        )
+        ctx.metrics[f"angle_dhr_exceeds_1.01_{deg}deg"] = (
+            float(np.degrees(above[0])) if above.size else None
+        )
         ctx.metrics[f"max_hemisphere_minus_sphere_{deg}deg"] = float(np.max(hemi - sphere))
     ax.axhline(1, color="k", lw=0.5)
-    ax.set(xlabel=r"$\theta_i$ [deg]", ylabel="DHR", ylim=(0.8, 3), xlim=(0, 90),
-           title="Unshadowed Priest-Germer pBRDF, PEC (Fig. 27)")
+    ax.set(
+        xlabel=r"$\theta_i$ [deg]",
+        ylabel="DHR",
+        ylim=(0.8, 3),
+        xlim=(0, 90),
+        title="Unshadowed Priest-Germer pBRDF, PEC (Fig. 27)",
+    )
     ax.legend(fontsize=7)
     ctx.save_figure(fig, "fig27")
     ctx.say(

@@ -5,13 +5,16 @@ slope" read as sigma = tan(n deg). The reference states that the shadowed DHRs n
 """
 
 import numpy as np
+from scatterlab.studies._common import rms_slope_from_degrees
 
 from scatterlab.pbrdf import dhr_beckmann
 from scatterlab.plotting import headless_pyplot as plt
-from scatterlab.studies._common import rms_slope_from_degrees
 
-STUDY = {"id": "fig28", "title": "DHR of the shadowed vs unshadowed pBRDF (PEC)",
-         "reproduces": "Fig. 28 (Sec. 3.2.3)"}
+STUDY = {
+    "id": "fig28",
+    "title": "DHR of the shadowed vs unshadowed pBRDF (PEC)",
+    "reproduces": "Fig. 28 (Sec. 3.2.3)",
+}
 
 
 def run(ctx):
@@ -19,8 +22,11 @@ def run(ctx):
     pyplot = plt()
     fig, ax = pyplot.subplots(figsize=(6, 4))
     curves = {}
-    for label, deg, shadowing in [("unshadowed 10 deg", 10, "none"), ("shadowed 10 deg", 10, "torrance-sparrow"),
-                                  ("shadowed 20 deg", 20, "torrance-sparrow")]:
+    for label, deg, shadowing in [
+        ("unshadowed 10 deg", 10, "none"),
+        ("shadowed 10 deg", 10, "torrance-sparrow"),
+        ("shadowed 20 deg", 20, "torrance-sparrow"),
+    ]:
         with ctx.step(label):
             curves[label] = dhr_beckmann(theta, rms_slope_from_degrees(deg), shadowing)
         ax.plot(np.degrees(theta), curves[label], label=label)

@@ -5,8 +5,11 @@ import numpy as np
 from scatterlab.pbrdf import PEC, Model
 from scatterlab.plotting import headless_pyplot as plt
 
-STUDY = {"id": "fig37", "title": "F00 of the Priest-Germer vs the shadowed pBRDF",
-         "reproduces": "Fig. 37 (Sec. 4.2.1)"}
+STUDY = {
+    "id": "fig37",
+    "title": "F00 of the Priest-Germer vs the shadowed pBRDF",
+    "reproduces": "Fig. 37 (Sec. 4.2.1)",
+}
 
 
 def run(ctx):
@@ -26,7 +29,9 @@ def run(ctx):
         ax.set(title=rf"$\theta_i$ = {deg} deg", xlabel=r"$\theta_r$ [deg]")
         ctx.metrics[f"F00_at_89.9deg_pg_{deg}"] = float(f_pg[-1])
         ctx.metrics[f"F00_at_89.9deg_shadowed_{deg}"] = float(f_ts[-1])
-        ctx.metrics[f"max_ratio_pg_over_shadowed_{deg}"] = float(np.max(f_pg / np.maximum(f_ts, 1e-300)))
+        ctx.metrics[f"max_ratio_pg_over_shadowed_{deg}"] = float(
+            np.max(f_pg / np.maximum(f_ts, 1e-300))
+        )
     axes[0].set_ylabel(r"$F_{00}$ [1/sr]")
     axes[0].legend(fontsize=7)
     ctx.save_figure(fig, "fig37")

@@ -3,9 +3,14 @@ synthetic measurements through an ECM-calibrated imperfect ellipsometer, against
 
 from scatterlab.studies._common import mueller_figure_study
 
-STUDY = {"id": "fig41", "title": "Mueller elements of Infragold: synthetic ECM measurement and pBRDF fit",
-         "reproduces": "Fig. 41 (Sec. 4.4)"}
+STUDY = {
+    "id": "fig41",
+    "title": "Mueller elements of Infragold: synthetic ECM measurement and pBRDF fit",
+    "reproduces": "Fig. 41 (Sec. 4.4)",
+}
 
 
 def run(ctx):
-    mueller_figure_study(ctx, 0.285 - 7.3523j, 0.44, "fig41", "0.4364 - j5.2526", "LabSphere Infragold")
+    mueller_figure_study(
+        ctx, 0.285 - 7.3523j, 0.44, "fig41", "0.4364 - j5.2526", "LabSphere Infragold"
+    )

@@ -3,9 +3,14 @@ synthetic measurements through an ECM-calibrated imperfect ellipsometer, against
 
 from scatterlab.studies._common import mueller_figure_study
 
-STUDY = {"id": "fig42", "title": "Mueller elements of flame-sprayed aluminium: synthetic ECM measurement and fit",
-         "reproduces": "Fig. 42 (Sec. 4.4)"}
+STUDY = {
+    "id": "fig42",
+    "title": "Mueller elements of flame-sprayed aluminium: synthetic ECM measurement and fit",
+    "reproduces": "Fig. 42 (Sec. 4.4)",
+}
 
 
 def run(ctx):
-    mueller_figure_study(ctx, 1.226 - 10.413j, 0.43, "fig42", "0.8886 - j3.4602", "flame-sprayed aluminium")
+    mueller_figure_study(
+        ctx, 1.226 - 10.413j, 0.43, "fig42", "0.8886 - j3.4602", "flame-sprayed aluminium"
+    )

@@ -8,13 +8,21 @@ import numpy as np
 
 from scatterlab import materials
 from scatterlab.pbrdf import Model
-from scatterlab.plotting import pbrdf_lobe_png, polar_contour
 from scatterlab.plotting import headless_pyplot as plt
+from scatterlab.plotting import pbrdf_lobe_png, polar_contour
 
-STUDY = {"id": "fig44", "title": "DOLP over the hemisphere for Al, Fe, glass, Teflon at 1550 nm",
-         "reproduces": "Fig. 44 (Sec. 5.2.2)"}
+STUDY = {
+    "id": "fig44",
+    "title": "DOLP over the hemisphere for Al, Fe, glass, Teflon at 1550 nm",
+    "reproduces": "Fig. 44 (Sec. 5.2.2)",
+}
 
-MATERIALS = {"Al": "ref:al_1550", "Fe": "ref:fe_1550", "glass": "ref:glass_1550", "Teflon": "ref:teflon_1550"}
+MATERIALS = {
+    "Al": "ref:al_1550",
+    "Fe": "ref:fe_1550",
+    "glass": "ref:glass_1550",
+    "Teflon": "ref:teflon_1550",
+}
 
 
 def run(ctx):
@@ -38,14 +46,24 @@ def run(ctx):
             ctx.metrics[f"phi_of_max_deg_{name}_{sigma}"] = float(np.degrees(phi[k[1]]))
     import matplotlib as mpl
 
-    fig.colorbar(mpl.cm.ScalarMappable(norm=mpl.colors.Normalize(0, 1), cmap="viridis"), ax=axes,
-                 shrink=0.6, label="DOLP")
+    fig.colorbar(
+        mpl.cm.ScalarMappable(norm=mpl.colors.Normalize(0, 1), cmap="viridis"),
+        ax=axes,
+        shrink=0.6,
+        label="DOLP",
+    )
     ctx.save_figure(fig, "fig44")
     with ctx.step("lobe_3d"):
         try:
-            pbrdf_lobe_png(Model(0.3), materials.index("ref:glass_1550", 1.55e-6), ti, ctx.out / "lobe_3d.png",
-                           n_theta=45 if ctx.quick else 90, n_phi=90 if ctx.quick else 180,
-                           title="glass, roughness 0.3, theta_i = 45 deg: F00 lobe coloured by DOLP")
+            pbrdf_lobe_png(
+                Model(0.3),
+                materials.index("ref:glass_1550", 1.55e-6),
+                ti,
+                ctx.out / "lobe_3d.png",
+                n_theta=45 if ctx.quick else 90,
+                n_phi=90 if ctx.quick else 180,
+                title="glass, roughness 0.3, theta_i = 45 deg: F00 lobe coloured by DOLP",
+            )
             ctx.add_image("lobe_3d")
             ctx.metrics["lobe_3d_rendered"] = True
         except Exception as exc:  # no OpenGL context: report it instead of failing the study
@@ -58,7 +76,8 @@ def run(ctx):
         f"(Teflon) at theta_r = {m['theta_r_of_max_glass_0.1']:.0f} and {m['theta_r_of_max_Teflon_0.1']:.0f} deg "
         "in the specular plane for roughness 0.1 -- the reference reports 'approximately 1 ... at an observation "
         "angle of approximately 60 deg' (Brewster: beta = (45 + 65)/2 ~ arctan(1.44) = 55 deg). Diffuse "
-        f"scattering keeps it below 1. Metals stay below {metal_max:.2f} everywhere (the reference: a metal prior extending to 0.3). "
+        f"scattering keeps it below 1. Metals stay below {metal_max:.2f} everywhere (the "
+        f"reference: a metal prior extending to 0.3). "
         "For roughness 0.6 the DOLP spreads out of the specular plane and loses magnitude "
         f"(glass max {m['max_dolp_glass_0.6']:.2f}), as the reference describes."
     )

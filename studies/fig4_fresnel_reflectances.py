@@ -12,8 +12,11 @@ import numpy as np
 
 from scatterlab import fresnel, materials
 
-STUDY = {"id": "fig4", "title": "Fresnel reflectances of glass and iron at 1 um",
-         "reproduces": "Fig. 4 (Sec. 2.6.1)"}
+STUDY = {
+    "id": "fig4",
+    "title": "Fresnel reflectances of glass and iron at 1 um",
+    "reproduces": "Fig. 4 (Sec. 2.6.1)",
+}
 
 
 def run(ctx):
@@ -35,7 +38,9 @@ def run(ctx):
         Rp_min_g = float(fresnel.reflectances(glass, tb)[1])
         Rp_min_f = float(fresnel.reflectances(iron, tpb)[1])
     interior = (theta > 0) & (theta < np.pi / 2)
-    frac_s_above_p = float(np.mean(np.r_[Rs_g[interior] > Rp_g[interior], Rs_f[interior] > Rp_f[interior]]))
+    frac_s_above_p = float(
+        np.mean(np.r_[Rs_g[interior] > Rp_g[interior], Rs_f[interior] > Rp_f[interior]])
+    )
 
     fig, ax = plt.subplots(figsize=(6, 4))
     deg = np.degrees(theta)
@@ -45,21 +50,33 @@ def run(ctx):
     ax.plot(deg, Rp_f, "r--", label="iron $R_p$")
     ax.axvline(np.degrees(tb), color="b", lw=0.5)
     ax.axvline(np.degrees(tpb), color="r", lw=0.5)
-    ax.set(xlabel=r"$\theta_i = \theta_r$ [deg]", ylabel="reflectance", xlim=(0, 90), ylim=(0, 1),
-           title=r"Fresnel reflectances at 1 $\mu$m (Fig. 4)")
+    ax.set(
+        xlabel=r"$\theta_i = \theta_r$ [deg]",
+        ylabel="reflectance",
+        xlim=(0, 90),
+        ylim=(0, 1),
+        title=r"Fresnel reflectances at 1 $\mu$m (Fig. 4)",
+    )
     ax.legend()
     ctx.save_figure(fig, "fig4")
 
-    ctx.metrics.update({
-        "eta_glass": glass, "eta_iron": iron,
-        "R_normal_glass": float(Rs_g[0]), "R_normal_iron": float(Rs_f[0]),
-        "brewster_glass_deg": np.degrees(tb), "pseudo_brewster_iron_deg": np.degrees(tpb),
-        "Rp_min_glass": Rp_min_g, "Rp_min_iron": Rp_min_f,
-        "fraction_angles_Rs_gt_Rp": frac_s_above_p,
-        "R_grazing_max_deviation_from_1": float(max(abs(1 - Rs_g[-1]), abs(1 - Rp_g[-1]),
-                                                     abs(1 - Rs_f[-1]), abs(1 - Rp_f[-1]))),
-        "n_angles": n_angles,
-    })
+    ctx.metrics.update(
+        {
+            "eta_glass": glass,
+            "eta_iron": iron,
+            "R_normal_glass": float(Rs_g[0]),
+            "R_normal_iron": float(Rs_f[0]),
+            "brewster_glass_deg": np.degrees(tb),
+            "pseudo_brewster_iron_deg": np.degrees(tpb),
+            "Rp_min_glass": Rp_min_g,
+            "Rp_min_iron": Rp_min_f,
+            "fraction_angles_Rs_gt_Rp": frac_s_above_p,
+            "R_grazing_max_deviation_from_1": float(
+                max(abs(1 - Rs_g[-1]), abs(1 - Rp_g[-1]), abs(1 - Rs_f[-1]), abs(1 - Rp_f[-1]))
+            ),
+            "n_angles": n_angles,
+        }
+    )
     ctx.say(
         f"As in Fig. 4, R_s exceeds R_p at every angle strictly between 0 and 90 deg for both materials "
         f"(fraction {frac_s_above_p:.3f}), so reflected unpolarized light is partially s-polarized (Eq. 57). "

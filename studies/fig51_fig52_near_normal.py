@@ -8,14 +8,17 @@ for the second half. Painted aluminium at D/r0 = 7.9 and painted steel at 12.9 (
 """
 
 import numpy as np
+from scatterlab.studies._common import plate_observations
 
 from scatterlab.characterization.pipeline import interior
 from scatterlab.deconvolution import PRIOR_SETS, classification_errors
 from scatterlab.plotting import headless_pyplot as plt
-from scatterlab.studies._common import plate_observations
 
-STUDY = {"id": "fig51_fig52", "title": "Near-normal classification (24 deg): fixed against adaptive DOLP priors",
-         "reproduces": "Figs. 51-52 (Sec. 5.3.4) and the adaptive priors of Sec. 8.1.1"}
+STUDY = {
+    "id": "fig51_fig52",
+    "title": "Near-normal classification (24 deg): fixed against adaptive DOLP priors",
+    "reproduces": "Figs. 51-52 (Sec. 5.3.4) and the adaptive priors of Sec. 8.1.1",
+}
 THRESHOLD = 0.08
 
 
@@ -24,52 +27,72 @@ def run(ctx):
     d_r0 = [[7.9], [12.9]]
     sel = interior((size, size), max(2, size // 16))
     with ctx.step("fixed_priors"):
-        fixed = plate_observations(ctx, 24.0, d_r0, priors=PRIOR_SETS["ch5"], iterations=its, size=size)
+        fixed = plate_observations(
+            ctx, 24.0, d_r0, priors=PRIOR_SETS["ch5"], iterations=its, size=size
+        )
     with ctx.step("adaptive_priors"):
-        adapt = plate_observations(ctx, 24.0, d_r0, priors=PRIOR_SETS["ch5"], iterations=its, size=size,
-                                   adaptive=True)
+        adapt = plate_observations(
+            ctx, 24.0, d_r0, priors=PRIOR_SETS["ch5"], iterations=its, size=size, adaptive=True
+        )
     pyplot = plt()
     fig, axes = pyplot.subplots(2, 5, figsize=(15, 6.4))
-    lines = ["| plate | classification | total error vs true labels | paint called metal | metal called paint |",
-             "|---|---|---|---|---|"]
+    lines = [
+        "| plate | classification | total error vs true labels | paint called metal | metal called paint |",
+        "|---|---|---|---|---|",
+    ]
     for row, plate in enumerate(fixed):
         labels = fixed[plate]["labels"]
         metal = (labels > 0).astype(int)
         case = f"D_r0_{d_r0[row][0]:g}"
         of, oa = fixed[plate]["obs"][0], adapt[plate]["obs"][0]
-        maps = {"no turbulence, P < 0.08": (of["no_turbulence"]["degraded"]["dolp"] < THRESHOLD).astype(int),
-                "degraded, P < 0.08": (of[case]["degraded"]["dolp"] < THRESHOLD).astype(int),
-                "corrected, Ch. V priors": (of[case]["corrected"]["classes"] > 0).astype(int),
-                "corrected, adaptive priors": (oa[case]["corrected"]["classes"] > 0).astype(int)}
+        maps = {
+            "no turbulence, P < 0.08": (of["no_turbulence"]["degraded"]["dolp"] < THRESHOLD).astype(
+                int
+            ),
+            "degraded, P < 0.08": (of[case]["degraded"]["dolp"] < THRESHOLD).astype(int),
+            "corrected, Ch. V priors": (of[case]["corrected"]["classes"] > 0).astype(int),
+            "corrected, adaptive priors": (oa[case]["corrected"]["classes"] > 0).astype(int),
+        }
         res = {}
         for name, m in maps.items():
             e = classification_errors(m, metal, mask=sel)
             paint = sel & (metal == 0)
-            res[name] = {"total": e["total_error"], "paint_called_metal": float(m[paint].mean()),
-                         "metal_called_paint": float(1 - m[sel & (metal == 1)].mean())}
-            lines.append(f"| {plate} | {name} | {e['total_error']:.3f} | {res[name]['paint_called_metal']:.3f} | "
-                         f"{res[name]['metal_called_paint']:.3f} |")
+            res[name] = {
+                "total": e["total_error"],
+                "paint_called_metal": float(m[paint].mean()),
+                "metal_called_paint": float(1 - m[sel & (metal == 1)].mean()),
+            }
+            lines.append(
+                f"| {plate} | {name} | {e['total_error']:.3f} | {res[name]['paint_called_metal']:.3f} | "
+                f"{res[name]['metal_called_paint']:.3f} |"
+            )
         pr = oa[case]["corrected"]["priors"]
         res["adaptive_centres"] = [p.c3 for p in pr]
         res["adaptive_half_widths"] = [1 / p.c2 for p in pr]
-        res["paint_dolp_no_turbulence"] = float(np.median(of["no_turbulence"]["degraded"]["dolp"][sel & (metal == 0)]))
+        res["paint_dolp_no_turbulence"] = float(
+            np.median(of["no_turbulence"]["degraded"]["dolp"][sel & (metal == 0)])
+        )
         ctx.metrics[plate] = res
         axes[row, 0].imshow(of["no_turbulence"]["degraded"]["dolp"], vmin=0, vmax=0.3)
         axes[row, 0].set_title(f"{plate}: DOLP, no turbulence", fontsize=8)
         for j, (name, m) in enumerate(maps.items(), start=1):
             axes[row, j].imshow(m, cmap="gray_r", vmin=0, vmax=1, interpolation="nearest")
-            axes[row, j].set_title(f"{name}\n(dark = metal), error {res[name]['total']:.2f}", fontsize=8)
+            axes[row, j].set_title(
+                f"{name}\n(dark = metal), error {res[name]['total']:.2f}", fontsize=8
+            )
     for a in axes.ravel():
         a.set_xticks([])
         a.set_yticks([])
     ctx.save_figure(fig, "fig51_fig52")
     ctx.say("\n".join(lines))
     al = ctx.metrics["aluminium"]
-    ctx.say(f"At 24 deg the paint's no-turbulence DOLP is about {al['paint_dolp_no_turbulence']:.2f}, far below the "
-            "Ch. V dielectric prior (0.65 +/- 0.32): the fixed priors call "
-            f"{al['corrected, Ch. V priors']['paint_called_metal']:.0%} of the paint metal (aluminium plate) -- the "
-            "limitation of Figs. 51i and 52i. Priors re-centred on the corrected DOLP histogram (two-means, centres "
-            f"{', '.join(f'{c:.3f}' for c in al['adaptive_centres'])}) bring the error to "
-            f"{al['corrected, adaptive priors']['total']:.3f} against {al['corrected, Ch. V priors']['total']:.3f} "
-            f"(degraded image thresholded at 0.08: {al['degraded, P < 0.08']['total']:.3f}; no-turbulence image: "
-            f"{al['no turbulence, P < 0.08']['total']:.3f}).")
+    ctx.say(
+        f"At 24 deg the paint's no-turbulence DOLP is about {al['paint_dolp_no_turbulence']:.2f}, far below the "
+        "Ch. V dielectric prior (0.65 +/- 0.32): the fixed priors call "
+        f"{al['corrected, Ch. V priors']['paint_called_metal']:.0%} of the paint metal (aluminium plate) -- the "
+        "limitation of Figs. 51i and 52i. Priors re-centred on the corrected DOLP histogram (two-means, centres "
+        f"{', '.join(f'{c:.3f}' for c in al['adaptive_centres'])}) bring the error to "
+        f"{al['corrected, adaptive priors']['total']:.3f} against {al['corrected, Ch. V priors']['total']:.3f} "
+        f"(degraded image thresholded at 0.08: {al['degraded, P < 0.08']['total']:.3f}; no-turbulence image: "
+        f"{al['no turbulence, P < 0.08']['total']:.3f})."
+    )

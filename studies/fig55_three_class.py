@@ -3,14 +3,17 @@ theta_i = theta_r = 55 deg; painted aluminium at D/r0 = 7.9, painted steel at 12
 """
 
 import numpy as np
+from scatterlab.studies._common import plate_observations
 
 from scatterlab.characterization.pipeline import interior
 from scatterlab.deconvolution import PRIOR_SETS
 from scatterlab.plotting import headless_pyplot as plt
-from scatterlab.studies._common import plate_observations
 
-STUDY = {"id": "fig55", "title": "Aluminium / iron / dielectric classification through turbulence (Ch. VI)",
-         "reproduces": "Figs. 54-55 (Sec. 6.3)"}
+STUDY = {
+    "id": "fig55",
+    "title": "Aluminium / iron / dielectric classification through turbulence (Ch. VI)",
+    "reproduces": "Figs. 54-55 (Sec. 6.3)",
+}
 NAMES = ("dielectric", "aluminium group", "iron group")
 
 
@@ -30,15 +33,27 @@ def run(ctx):
         case = f"D_r0_{d_r0[row][0]:g}"
         o = d["obs"][0]
         res = {}
-        for j, (name, cls) in enumerate((("no turbulence", o["no_turbulence"]["degraded"]["classes"]),
-                                         ("degraded", o[case]["degraded"]["classes"]),
-                                         ("corrected", o[case]["corrected"]["classes"]))):
+        for j, (name, cls) in enumerate(
+            (
+                ("no turbulence", o["no_turbulence"]["degraded"]["classes"]),
+                ("degraded", o[case]["degraded"]["classes"]),
+                ("corrected", o[case]["corrected"]["classes"]),
+            )
+        ):
             frac = {}
-            for region, rsel in (("paint", sel & (labels == 0)), ("bare metal", sel & (labels > 0))):
+            for region, rsel in (
+                ("paint", sel & (labels == 0)),
+                ("bare metal", sel & (labels > 0)),
+            ):
                 f = np.bincount(cls[rsel], minlength=3) / rsel.sum()
                 frac[region] = f.tolist()
-                lines.append(f"| {plate} | {name} | {region} | " + " | ".join(f"{v:.3f}" for v in f) + " |")
-            correct = (np.sum(cls[sel & (labels == 0)] == 0) + np.sum(cls[sel & (labels > 0)] == expected[plate])) / sel.sum()
+                lines.append(
+                    f"| {plate} | {name} | {region} | " + " | ".join(f"{v:.3f}" for v in f) + " |"
+                )
+            correct = (
+                np.sum(cls[sel & (labels == 0)] == 0)
+                + np.sum(cls[sel & (labels > 0)] == expected[plate])
+            ) / sel.sum()
             frac["correct"] = float(correct)
             res[name] = frac
             axes[row, j].imshow(cls, cmap="viridis", vmin=0, vmax=2, interpolation="nearest")
@@ -47,13 +62,18 @@ def run(ctx):
             axes[row, j].set_yticks([])
         ctx.metrics[plate] = res
     ctx.save_figure(fig, "fig55")
-    ctx.say("Fractions of each region given each class (0 dielectric, 1 aluminium group, 2 iron group; the "
-            "no-turbulence and degraded maps take the class of largest prior density at the measured DOLP):\n\n"
-            + "\n".join(lines))
-    ctx.say(f"Correct fraction, corrected: aluminium plate {ctx.metrics['aluminium']['corrected']['correct']:.2f} "
-            f"(degraded {ctx.metrics['aluminium']['degraded']['correct']:.2f}), steel plate "
-            f"{ctx.metrics['steel']['corrected']['correct']:.2f} (degraded {ctx.metrics['steel']['degraded']['correct']:.2f}). "
-            "As in Fig. 55 the errors sit at the metal/paint boundaries, where the halo of the bright metal "
-            "lowers the paint's DOLP and the paint's light raises the metal's. (The reference's other error "
-            "source, scratches polarizing like a wire grid, needs an anisotropic surface model the isotropic "
-            "pBRDF does not have.)")
+    ctx.say(
+        "Fractions of each region given each class (0 dielectric, 1 aluminium group, 2 iron group; the "
+        "no-turbulence and degraded maps take the class of largest prior density at the measured DOLP):\n\n"
+        + "\n".join(lines)
+    )
+    ctx.say(
+        f"Correct fraction, corrected: aluminium plate {ctx.metrics['aluminium']['corrected']['correct']:.2f} "
+        f"(degraded {ctx.metrics['aluminium']['degraded']['correct']:.2f}), steel plate "
+        f"{ctx.metrics['steel']['corrected']['correct']:.2f} (degraded "
+        f"{ctx.metrics['steel']['degraded']['correct']:.2f}). "
+        "As in Fig. 55 the errors sit at the metal/paint boundaries, where the halo of the bright metal "
+        "lowers the paint's DOLP and the paint's light raises the metal's. (The reference's other error "
+        "source, scratches polarizing like a wire grid, needs an anisotropic surface model the isotropic "
+        "pBRDF does not have.)"
+    )

@@ -8,8 +8,11 @@ import numpy as np
 from scatterlab.pbrdf import Model
 from scatterlab.plotting import headless_pyplot as plt
 
-STUDY = {"id": "fig58", "title": "DOLP vs roughness at specular geometries (glass, iron)",
-         "reproduces": "Fig. 58 (Sec. 7.3)"}
+STUDY = {
+    "id": "fig58",
+    "title": "DOLP vs roughness at specular geometries (glass, iron)",
+    "reproduces": "Fig. 58 (Sec. 7.3)",
+}
 
 
 def run(ctx):

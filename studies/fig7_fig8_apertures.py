@@ -3,11 +3,21 @@
 
 import numpy as np
 
-from scatterlab.imaging import circular_pupil, convolve, painted_plate, phase_screen, psf, render_stokes
+from scatterlab.imaging import (
+    circular_pupil,
+    convolve,
+    painted_plate,
+    phase_screen,
+    psf,
+    render_stokes,
+)
 from scatterlab.plotting import headless_pyplot as plt
 
-STUDY = {"id": "fig7_fig8", "title": "Diffraction-limited and turbulence-degraded images through three apertures",
-         "reproduces": "Figs. 7 and 8 (Sec. 2.8)"}
+STUDY = {
+    "id": "fig7_fig8",
+    "title": "Diffraction-limited and turbulence-degraded images through three apertures",
+    "reproduces": "Figs. 7 and 8 (Sec. 2.8)",
+}
 
 
 def run(ctx):
@@ -26,11 +36,21 @@ def run(ctx):
             img_dl = convolve(obj, h_dl)
             img_tu = convolve(obj, h_tu)
         d_r0 = 2 * R / r0_px
-        for row, (im, title) in enumerate([(img_dl, "diffraction-limited"), (h_dl, "PSF"),
-                                           (img_tu, f"turbulence, D/r0 = {d_r0:.1f}"), (h_tu, "PSF (turbulence)")]):
+        for row, (im, title) in enumerate(
+            [
+                (img_dl, "diffraction-limited"),
+                (h_dl, "PSF"),
+                (img_tu, f"turbulence, D/r0 = {d_r0:.1f}"),
+                (h_tu, "PSF (turbulence)"),
+            ]
+        ):
             ax = axes[row, col]
             c = im.shape[0] // 2
-            show = im if "PSF" not in title else im[c - n // 4:c + n // 4, c - n // 4:c + n // 4] ** 0.5
+            show = (
+                im
+                if "PSF" not in title
+                else im[c - n // 4 : c + n // 4, c - n // 4 : c + n // 4] ** 0.5
+            )
             ax.imshow(show, cmap="gray")
             ax.set_title(f"D = {2 * R:.0f} px: {title}", fontsize=8)
             ax.axis("off")
@@ -44,8 +64,10 @@ def run(ctx):
     w_tu = [m[f"psf_width_px_turb_D{2 * R:.0f}"] for R in radii]
     ctx.say(
         "Fig. 7: the diffraction-limited PSF narrows as the aperture grows (equivalent widths "
-        + ", ".join(f"{w:.1f}" for w in w_dl) + " px), so resolution improves. Fig. 8: through turbulence "
+        + ", ".join(f"{w:.1f}" for w in w_dl)
+        + " px), so resolution improves. Fig. 8: through turbulence "
         f"(D/r0 = {m['D_over_r0_0']:.1f}, {m['D_over_r0_1']:.1f}, {m['D_over_r0_2']:.1f}) the widths are "
-        + ", ".join(f"{w:.1f}" for w in w_tu) + " px: beyond D ~ r0 a larger aperture does not sharpen the "
+        + ", ".join(f"{w:.1f}" for w in w_tu)
+        + " px: beyond D ~ r0 a larger aperture does not sharpen the "
         "image, which is limited by r0 (Eq. 77)."
     )

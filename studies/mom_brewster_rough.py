@@ -10,9 +10,7 @@ of rms slope 0.1 and 0.3, averaged over realizations; the energy check R + T = 1
 alongside.
 """
 
-
 import numpy as np
-
 from scatterlab.studies._common import plt
 
 from scatterlab.fresnel import reflectances

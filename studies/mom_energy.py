@@ -5,8 +5,11 @@ import numpy as np
 from scatterlab.mom import TaperedWave, correlation_length_for_slope, rough_surface, solve_tm
 from scatterlab.plotting import headless_pyplot as plt
 
-STUDY = {"id": "mom_energy", "title": "MoM energy conservation vs incidence angle and roughness",
-         "reproduces": "own validation (issue 4): conservation of energy (Tsang et al.'s passive-sensing grade)"}
+STUDY = {
+    "id": "mom_energy",
+    "title": "MoM energy conservation vs incidence angle and roughness",
+    "reproduces": "own validation (issue 4): conservation of energy (Tsang et al.'s passive-sensing grade)",
+}
 
 
 def run(ctx):
@@ -24,8 +27,13 @@ def run(ctx):
         e = []
         for _ in range(reals):
             x, y = rough_surface(length, 0.1 if slope <= 0.4 else 0.05, 0.5, l, ctx.rng)
-            ok = [t for t in angles if np.cos(t) * length / 4 * 2 * np.pi >= 10 and
-                  (1 + 2 * np.tan(t) ** 2) / (2 * (2 * np.pi * length / 4 * np.cos(t)) ** 2) <= 0.02]
+            ok = [
+                t
+                for t in angles
+                if np.cos(t) * length / 4 * 2 * np.pi >= 10
+                and (1 + 2 * np.tan(t) ** 2) / (2 * (2 * np.pi * length / 4 * np.cos(t)) ** 2)
+                <= 0.02
+            ]
             with ctx.step(f"slope_{slope}"):
                 sol = solve_tm(x, y, 1.0, [TaperedWave(t, length / 4) for t in ok])
             e.append(np.sum(wq[:, None] * sol.scattering_coefficient(ths), 0) * np.pi / 2)
@@ -34,10 +42,17 @@ def run(ctx):
         ctx.metrics[f"slope_{slope}"] = {f"{np.degrees(t):.0f}": float(v) for t, v in zip(ok, e)}
         worst[slope] = float(np.max(np.abs(e - 1)))
     ax.axhspan(-0.005, 0.005, color="0.9", label="0.5 % band")
-    ax.set(xlabel=r"$\theta_i$ [deg]", ylabel="integrated coefficient - 1", title=f"{length:.0f}-wavelength surfaces")
+    ax.set(
+        xlabel=r"$\theta_i$ [deg]",
+        ylabel="integrated coefficient - 1",
+        title=f"{length:.0f}-wavelength surfaces",
+    )
     ax.legend(fontsize=7)
     ctx.save_figure(fig, "mom_energy")
     ctx.metrics["worst_abs_deviation"] = worst
-    ctx.say("Largest |energy - 1| per rms slope: " + ", ".join(f"{k}: {v:.1e}" for k, v in worst.items())
-            + ". Angles whose taper fails the validity check for this surface length are left out (the solver "
-            "refuses them).")
+    ctx.say(
+        "Largest |energy - 1| per rms slope: "
+        + ", ".join(f"{k}: {v:.1e}" for k, v in worst.items())
+        + ". Angles whose taper fails the validity check for this surface length are left out (the solver "
+        "refuses them)."
+    )

@@ -6,8 +6,11 @@ import numpy as np
 from scatterlab.imaging import turbulence as T
 from scatterlab.plotting import headless_pyplot as plt
 
-STUDY = {"id": "phase_screens", "title": "Phase-screen structure function with and without subharmonics",
-         "reproduces": "own study (Eqs. 71-79 and their errata)"}
+STUDY = {
+    "id": "phase_screens",
+    "title": "Phase-screen structure function with and without subharmonics",
+    "reproduces": "own study (Eqs. 71-79 and their errata)",
+}
 
 
 def run(ctx):
@@ -40,7 +43,8 @@ def run(ctx):
         ctx.metrics[f"ratio_at_half_width_{key}"] = float(ratio[-1])
     m = ctx.metrics
     ctx.say(
-        f"Plain FFT screens (Eq. 79) reach only {m['min_ratio_2px_to_half_plain']:.2f}-{m['max_ratio_2px_to_half_plain']:.2f} "
+        f"Plain FFT screens (Eq. 79) reach only "
+        f"{m['min_ratio_2px_to_half_plain']:.2f}-{m['max_ratio_2px_to_half_plain']:.2f} "
         "of the Kolmogorov structure function between 2 px and D/2: the FFT grid has no power below its first "
         "frequency, and for a singular spectrum that matters at every separation. With subharmonics whose cell "
         "variances are integrated (not point-sampled) the ratio is "

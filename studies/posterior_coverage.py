@@ -18,7 +18,6 @@ show what ignoring the correlation costs.
 import warnings
 
 import numpy as np
-
 from scatterlab.studies._common import plt
 
 from scatterlab.inversion import ConvergenceWarning, model_dolp, sample_posteriors

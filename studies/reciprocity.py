@@ -10,8 +10,11 @@ import numpy as np
 from scatterlab.pbrdf import PEC, Model
 from scatterlab.plotting import headless_pyplot as plt
 
-STUDY = {"id": "reciprocity", "title": "Reciprocity of the diffuse term: Eq. 177 vs a reciprocal form",
-         "reproduces": "own study (errata to Sec. 4.2.3)"}
+STUDY = {
+    "id": "reciprocity",
+    "title": "Reciprocity of the diffuse term: Eq. 177 vs a reciprocal form",
+    "reproduces": "own study (errata to Sec. 4.2.3)",
+}
 
 
 def run(ctx):
@@ -24,12 +27,16 @@ def run(ctx):
     for ax, diffuse in zip(axes[:2], ("hyde", "reciprocal")):
         m = Model(sigma, diffuse=diffuse)
         with ctx.step(diffuse):
-            a = m.mueller(PEC, TI, TR, 1.0)[..., 0, 0]  # off-plane azimuth, where the diffuse term matters
+            a = m.mueller(PEC, TI, TR, 1.0)[
+                ..., 0, 0
+            ]  # off-plane azimuth, where the diffuse term matters
             b = m.mueller(PEC, TR, TI, 1.0)[..., 0, 0]
         asym = np.abs(a - b) / np.maximum(0.5 * (a + b), 1e-300)
         im = ax.pcolormesh(np.degrees(th), np.degrees(th), asym.T, shading="auto")
         fig.colorbar(im, ax=ax)
-        ax.set(title=f"{diffuse}: |F(i,r) - F(r,i)| / F", xlabel=r"$\theta_i$", ylabel=r"$\theta_r$")
+        ax.set(
+            title=f"{diffuse}: |F(i,r) - F(r,i)| / F", xlabel=r"$\theta_i$", ylabel=r"$\theta_r$"
+        )
         ctx.metrics[f"max_relative_asymmetry_{diffuse}"] = float(asym.max())
         # energy: int F00 cos dw = rho + int D cos dw; D does not depend on phi
         mu, w = np.polynomial.legendre.leggauss(200)

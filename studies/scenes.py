@@ -4,13 +4,25 @@ polarimeter with shot, read and dark noise (Figs. 49-50 scenes)."""
 
 import numpy as np
 
-from scatterlab.imaging import (ANGLES_0_45_90_135, channel_images, circular_pupil, detect,
-                                dolp_aop_from_stokes, painted_plate, phase_screen, psf, render_stokes,
-                                stokes_from_channels)
+from scatterlab.imaging import (
+    ANGLES_0_45_90_135,
+    channel_images,
+    circular_pupil,
+    detect,
+    dolp_aop_from_stokes,
+    painted_plate,
+    phase_screen,
+    psf,
+    render_stokes,
+    stokes_from_channels,
+)
 from scatterlab.plotting import headless_pyplot as plt
 
-STUDY = {"id": "scenes", "title": "Painted-plate polarimetric scenes, clean and turbulence-degraded",
-         "reproduces": "scenes of Figs. 47, 49-50 (Sec. 5.3)"}
+STUDY = {
+    "id": "scenes",
+    "title": "Painted-plate polarimetric scenes, clean and turbulence-degraded",
+    "reproduces": "scenes of Figs. 47, 49-50 (Sec. 5.3)",
+}
 
 
 def run(ctx):
@@ -31,8 +43,13 @@ def run(ctx):
         for k, d_r0 in enumerate((7.9, 10.5, 12.9)):
             with ctx.step(f"degrade_{name}_{d_r0}"):
                 h = psf(pupil, phase_screen(n, 1.0, n / d_r0, ctx.rng), pad=2)
-                counts = detect(channel_images(S, ANGLES_0_45_90_135, h), ctx.rng, photons=2e4, read_noise=10,
-                                dark_current=5)
+                counts = detect(
+                    channel_images(S, ANGLES_0_45_90_135, h),
+                    ctx.rng,
+                    photons=2e4,
+                    read_noise=10,
+                    dark_current=5,
+                )
                 Se = stokes_from_channels(counts, ANGLES_0_45_90_135)
                 dolp, _ = dolp_aop_from_stokes(Se, min_intensity=1.0)
             err = float(np.sqrt(np.mean((dolp.filled(0) - clean_dolp) ** 2)))
@@ -46,16 +63,22 @@ def run(ctx):
                 axes[r, k].axis("off")
         ctx.metrics[f"clean_dolp_paint_{name}"] = float(clean_dolp[scene.labels == 0].mean())
         ctx.metrics[f"clean_dolp_metal_{name}"] = float(clean_dolp[scene.labels == 1].mean())
-        ctx.metrics[f"brightness_metal_over_paint_{name}"] = float(S[0][scene.labels == 1].mean()
-                                                                    / S[0][scene.labels == 0].mean())
+        ctx.metrics[f"brightness_metal_over_paint_{name}"] = float(
+            S[0][scene.labels == 1].mean() / S[0][scene.labels == 0].mean()
+        )
     ctx.save_figure(fig, "scenes")
     m = ctx.metrics
     ctx.say(
-        f"Clean DOLP: paint {m['clean_dolp_paint_aluminium']:.2f}, bare aluminium {m['clean_dolp_metal_aluminium']:.3f}, "
+        f"Clean DOLP: paint {m['clean_dolp_paint_aluminium']:.2f}, bare aluminium "
+        f"{m['clean_dolp_metal_aluminium']:.3f}, "
         f"bare steel {m['clean_dolp_metal_steel']:.3f} at 50 deg (the paint/metal contrast the classifier uses). "
         f"In this specular geometry the smoother bare metal is {m['brightness_metal_over_paint_aluminium']:.0f}x "
-        f"(aluminium) and {m['brightness_metal_over_paint_steel']:.0f}x (steel) brighter than the paint, so turbulence spreads "
+        f"(aluminium) and {m['brightness_metal_over_paint_steel']:.0f}x (steel) brighter than the "
+        f"paint, so turbulence spreads "
         "its unpolarized light far over the painted areas and the DOLP collapses well beyond the letter edges; "
-        "DOLP RMSE against the clean image: " + ", ".join(f"{k.split('_', 2)[2]}: {v:.3f}" for k, v in m.items() if k.startswith("dolp_rmse"))
+        "DOLP RMSE against the clean image: "
+        + ", ".join(
+            f"{k.split('_', 2)[2]}: {v:.3f}" for k, v in m.items() if k.startswith("dolp_rmse")
+        )
         + ". These are the data the deconvolution of issue 8 must undo."
     )

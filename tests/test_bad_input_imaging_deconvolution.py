@@ -6,8 +6,14 @@ import pytest
 
 from scatterlab import imaging
 from scatterlab.cli import main
-from scatterlab.deconvolution import (PRIOR_SETS, SuperGaussianPrior, blind_deconvolve, dolp_update,
-                                      dolp_update_companion, map_objective)
+from scatterlab.deconvolution import (
+    PRIOR_SETS,
+    SuperGaussianPrior,
+    blind_deconvolve,
+    dolp_update,
+    dolp_update_companion,
+    map_objective,
+)
 
 A = imaging.ANGLES_0_45_90_135
 GOOD = np.random.default_rng(0).poisson(100, (4, 16, 16)).astype(float)
@@ -25,8 +31,12 @@ CASES = [
     (lambda: blind_deconvolve(GOOD, A, psf0=np.zeros((32, 32)), iterations=2), "psf0"),
     (lambda: blind_deconvolve(GOOD, A, psf0=-np.ones((32, 32)), iterations=2), "psf0"),
     (lambda: blind_deconvolve(GOOD, A, psf_radius=0, iterations=2), "psf_radius"),
-    (lambda: blind_deconvolve(GOOD, A, priors=PRIOR_SETS["ch5"], prior_weight=np.nan, iterations=2),
-     "prior_weight"),
+    (
+        lambda: blind_deconvolve(
+            GOOD, A, priors=PRIOR_SETS["ch5"], prior_weight=np.nan, iterations=2
+        ),
+        "prior_weight",
+    ),
     (lambda: blind_deconvolve(GOOD, np.array([0, 45, 90, 135.0]), iterations=2), "radians"),
     (lambda: SuperGaussianPrior(1e40, 0.3), "c2"),
     (lambda: SuperGaussianPrior(3.0, 1.5), "c3"),
@@ -50,7 +60,9 @@ def test_dolp_update_at_q_equal_one_takes_the_best_root():
     prior = PRIOR_SETS["ch5"][0]
     P = np.linspace(0, 1, 200001)
     best = P[np.argmax(map_objective(P, 10.0, 10.0, prior))]
-    assert dolp_update(np.array([10.0]), np.array([10.0]), prior)[0] == pytest.approx(best, abs=1e-5)
+    assert dolp_update(np.array([10.0]), np.array([10.0]), prior)[0] == pytest.approx(
+        best, abs=1e-5
+    )
     assert dolp_update_companion(10.0, 10.0, prior) == pytest.approx(best, abs=1e-5)
 
 

@@ -13,7 +13,17 @@ from scatterlab import fresnel, polarization
 
 mpmath.mp.dps = 50
 
-ETAS = [1.45025, 3.23 - 4.35j, 0.314 - 3.544j, 1.44 - 16j, 0.3, 0.01 - 1000j, 20.0, 1 + 1e-9, 2.5 - 1e-6j]
+ETAS = [
+    1.45025,
+    3.23 - 4.35j,
+    0.314 - 3.544j,
+    1.44 - 16j,
+    0.3,
+    0.01 - 1000j,
+    20.0,
+    1 + 1e-9,
+    2.5 - 1e-6j,
+]
 
 
 def mp_coefficients(eta, theta):
@@ -126,7 +136,9 @@ def test_eq53_rp_from_rs():
     A, B = u.real, -u.imag
     st_ = np.sin(th) * np.tan(th)
     Rs, Rp = fresnel.reflectances(n - 1j * k, th)
-    np.testing.assert_allclose(Rp, ((A - st_) ** 2 + B**2) / ((A + st_) ** 2 + B**2) * Rs, rtol=1e-12)
+    np.testing.assert_allclose(
+        Rp, ((A - st_) ** 2 + B**2) / ((A + st_) ** 2 + B**2) * Rs, rtol=1e-12
+    )
 
 
 def test_mueller_matrix_eq55_equals_jones_conversion():
@@ -135,7 +147,9 @@ def test_mueller_matrix_eq55_equals_jones_conversion():
     rs, rp = fresnel.coefficients(eta, theta)
     J = np.zeros(rs.shape + (2, 2), complex)
     J[..., 0, 0], J[..., 1, 1] = rs, rp
-    np.testing.assert_allclose(fresnel.mueller_matrix(eta, theta), polarization.jones_to_mueller(J), atol=1e-14)
+    np.testing.assert_allclose(
+        fresnel.mueller_matrix(eta, theta), polarization.jones_to_mueller(J), atol=1e-14
+    )
     # unpolarized light: DOP = (Rs - Rp)/(Rs + Rp), AOP = 0 (Eq. 57)
     S = polarization.apply(fresnel.mueller_matrix(1.5, 0.6), [1, 0, 0, 0])
     Rs, Rp = fresnel.reflectances(1.5, 0.6)

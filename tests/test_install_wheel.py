@@ -179,9 +179,33 @@ def test_wheel_installs_and_runs_outside_the_repository(tmp_path):
     examples = ROOT / "data" / "examples"
     shutil.copy(examples / "mueller_brdf_scatmech_style.csv", work)
     shutil.copy(examples / "painted_plate.h5", work)
-    _run([scatterlab, "fit-mueller", "mueller_brdf_scatmech_style.csv", "--time-convention", "exp(-iwt)",
-          "--out", tmp_path / "fit"], work, env)
+    _run(
+        [
+            scatterlab,
+            "fit-mueller",
+            "mueller_brdf_scatmech_style.csv",
+            "--time-convention",
+            "exp(-iwt)",
+            "--out",
+            tmp_path / "fit",
+        ],
+        work,
+        env,
+    )
     assert (tmp_path / "fit" / "report.md").is_file()
-    _run([scatterlab, "analyze", "painted_plate.h5", "--iterations", "4", "--posterior-steps", "200",
-          "--out", tmp_path / "analyze"], work, env)
+    _run(
+        [
+            scatterlab,
+            "analyze",
+            "painted_plate.h5",
+            "--iterations",
+            "4",
+            "--posterior-steps",
+            "200",
+            "--out",
+            tmp_path / "analyze",
+        ],
+        work,
+        env,
+    )
     assert (tmp_path / "analyze" / "report.md").is_file()

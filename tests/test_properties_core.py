@@ -43,8 +43,14 @@ def etas(draw):
     return complex(mag * np.cos(phase), min(mag * np.sin(phase), 0.0))
 
 
-PBRDF_CASES = dict(eta=etas(), theta_i=polar_angles, theta_r=polar_angles, phi=azimuths,
-                   sigma=sigmas, shadowing=shadowings)
+PBRDF_CASES = dict(
+    eta=etas(),
+    theta_i=polar_angles,
+    theta_r=polar_angles,
+    phi=azimuths,
+    sigma=sigmas,
+    shadowing=shadowings,
+)
 
 
 @SETTINGS

@@ -12,7 +12,9 @@ BLOCKS = re.findall(r"```python\n(.*?)```", README.read_text(), re.S)
 
 @pytest.mark.parametrize("i", range(len(BLOCKS)))
 def test_readme_snippet_runs(i, monkeypatch):
-    monkeypatch.chdir(README.parent)  # paths in the snippets are relative to the repository (none writes)
+    monkeypatch.chdir(
+        README.parent
+    )  # paths in the snippets are relative to the repository (none writes)
     exec(compile(BLOCKS[i], f"README.md[python block {i}]", "exec"), {})
 
 

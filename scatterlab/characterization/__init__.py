@@ -9,5 +9,15 @@ from scatterlab.characterization.acquisition import Acquisition, Ideal, acquire
 from scatterlab.characterization.pipeline import characterize, observe, run_plate
 from scatterlab.characterization.scene_config import Plate, SceneConfig, default_scene, load_scene
 
-__all__ = ["characterize", "observe", "run_plate", "acquire", "Acquisition", "Ideal", "SceneConfig", "Plate",
-           "default_scene", "load_scene"]
+__all__ = [
+    "characterize",
+    "observe",
+    "run_plate",
+    "acquire",
+    "Acquisition",
+    "Ideal",
+    "SceneConfig",
+    "Plate",
+    "default_scene",
+    "load_scene",
+]

@@ -117,8 +117,9 @@ def _field_psf(pupil, screen, shape):
     return resample_psf(psf(pupil, screen, pad=2), shape)
 
 
-def acquire(plate, labels, theta, case, d_over_r0, cfg, rng, ideal: Ideal = Ideal(), *,
-            psf=None) -> Acquisition:
+def acquire(
+    plate, labels, theta, case, d_over_r0, cfg, rng, ideal: Ideal = Ideal(), *, psf=None
+) -> Acquisition:
     """Simulate one acquisition of ``plate`` at the specular geometry ``theta``.
 
     Parameters
@@ -147,7 +148,13 @@ def acquire(plate, labels, theta, case, d_over_r0, cfg, rng, ideal: Ideal = Idea
     Acquisition
     """
     from scatterlab.characterization.registration import foreshorten
-    from scatterlab.imaging import channel_images, circular_pupil, detect, phase_screen, render_stokes
+    from scatterlab.imaging import (
+        channel_images,
+        circular_pupil,
+        detect,
+        phase_screen,
+        render_stokes,
+    )
 
     labels = np.asarray(labels)
     H, W = labels.shape
@@ -160,7 +167,9 @@ def acquire(plate, labels, theta, case, d_over_r0, cfg, rng, ideal: Ideal = Idea
     S_cam = render_stokes(plate_scene(plate, seen, theta))
     n = H // 2
     pupil = circular_pupil(n, n / 2)
-    screen = None if d_over_r0 is None or psf is not None else phase_screen(n, 1.0, n / d_over_r0, rng)
+    screen = (
+        None if d_over_r0 is None or psf is not None else phase_screen(n, 1.0, n / d_over_r0, rng)
+    )
     if psf is not None:
         from scatterlab.deconvolution import resample_psf
 
@@ -170,7 +179,7 @@ def acquire(plate, labels, theta, case, d_over_r0, cfg, rng, ideal: Ideal = Idea
         h_wide[seen.shape[0] // 2, seen.shape[1] // 2] = 1.0
     else:
         h_wide = _field_psf(pupil, screen, seen.shape)
-    channels = channel_images(S_cam, angles, h_wide)[:, my:my + H, mx:mx + W]
+    channels = channel_images(S_cam, angles, h_wide)[:, my : my + H, mx : mx + W]
     channels = np.clip(channels, 0.0, None)  # FFT round-off below zero
     if ideal.noise:
         counts = cfg.photons * channels / channels.max()
@@ -181,6 +190,15 @@ def acquire(plate, labels, theta, case, d_over_r0, cfg, rng, ideal: Ideal = Idea
     psf_true = resample_psf(h_wide, (H, W))
     with np.errstate(divide="ignore", invalid="ignore"):
         truth_dolp = np.where(S_obj[0] > 0, S_obj[1] / S_obj[0], np.nan)
-    return Acquisition(theta=float(theta), case=case, d_over_r0=d_over_r0, counts=counts, angles=angles,
-                       psf_true=psf_true, pupil=pupil, truth_s0=S_obj[0], truth_dolp=truth_dolp,
-                       foreshortened=not ideal.foreshortening)
+    return Acquisition(
+        theta=float(theta),
+        case=case,
+        d_over_r0=d_over_r0,
+        counts=counts,
+        angles=angles,
+        psf_true=psf_true,
+        pupil=pupil,
+        truth_s0=S_obj[0],
+        truth_dolp=truth_dolp,
+        foreshortened=not ideal.foreshortening,
+    )

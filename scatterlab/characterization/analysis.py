@@ -22,8 +22,12 @@ from pathlib import Path
 import numpy as np
 
 from scatterlab.characterization.acquisition import Acquisition
-from scatterlab.characterization.estimation import (default_margin, pixel_maps, region_data,
-                                                    region_posteriors)
+from scatterlab.characterization.estimation import (
+    default_margin,
+    pixel_maps,
+    region_data,
+    region_posteriors,
+)
 from scatterlab.characterization.pipeline import _restore_task, interior, log_stage
 from scatterlab.characterization.registration import register_restoration
 from scatterlab.characterization.restoration import RestoreSettings
@@ -73,7 +77,9 @@ class AnalyzeSettings:
         if not 1e-3 <= self.sigma <= 1.5:
             raise ValueError(f"sigma must be in [0.001, 1.5], got {self.sigma}")
         if not 100 <= self.posterior_steps <= 10**6:
-            raise ValueError(f"posterior_steps must be in [100, 1000000], got {self.posterior_steps}")
+            raise ValueError(
+                f"posterior_steps must be in [100, 1000000], got {self.posterior_steps}"
+            )
         return self
 
 
@@ -84,8 +90,10 @@ def _optics_psf(ds):
     H = ds.counts.shape[-2]
     q = ds.optics.sampling(ds.wavelength)
     if abs(q - round(q)) > 1e-6 or round(q) < 2 or H % round(q):
-        raise ValueError(f"the dataset's optics sample the PSF at {q:.4g} pixels per lambda/D: analyze needs "
-                         f"an integer >= 2 that divides the image size {H}")
+        raise ValueError(
+            f"the dataset's optics sample the PSF at {q:.4g} pixels per lambda/D: analyze needs "
+            f"an integer >= 2 that divides the image size {H}"
+        )
     n = H // round(q)
     pupil = circular_pupil(n, n / 2)
     return pupil, psf(pupil, pad=round(q))
@@ -100,9 +108,19 @@ def _acquisitions(ds, settings):
         t = ds.truth
         ts = t.s0[g] if t is not None and t.s0 is not None else blank
         td = t.dolp[g] if t is not None and t.dolp is not None else blank
-        out.append(Acquisition(float(th), "measured", None if settings.psf == "diffraction" else float("nan"),
-                               np.asarray(ds.counts[g], float), np.asarray(ds.polarizer_angles, float), h,
-                               pupil, ts, td))
+        out.append(
+            Acquisition(
+                float(th),
+                "measured",
+                None if settings.psf == "diffraction" else float("nan"),
+                np.asarray(ds.counts[g], float),
+                np.asarray(ds.polarizer_angles, float),
+                h,
+                pupil,
+                ts,
+                td,
+            )
+        )
     return out
 
 
@@ -110,15 +128,29 @@ def _config(ds, settings):
     """The scene description the re-simulation needs (sizes, polarizers, EM settings)."""
     from scatterlab.characterization.scene_config import SceneConfig
 
-    return SceneConfig(image_size=int(ds.counts.shape[-1]), geometry_deg=list(np.degrees(ds.theta)),
-                       d_over_r0=[], polarizer_deg=list(np.degrees(ds.polarizer_angles)),
-                       iterations=settings.iterations, psf_model=settings.psf_model, priors=settings.priors,
-                       sigma_known=settings.sigma, posterior_steps=settings.posterior_steps,
-                       seed=settings.seed, wavelength_um=ds.wavelength * 1e6)
+    return SceneConfig(
+        image_size=int(ds.counts.shape[-1]),
+        geometry_deg=list(np.degrees(ds.theta)),
+        d_over_r0=[],
+        polarizer_deg=list(np.degrees(ds.polarizer_angles)),
+        iterations=settings.iterations,
+        psf_model=settings.psf_model,
+        priors=settings.priors,
+        sigma_known=settings.sigma,
+        posterior_steps=settings.posterior_steps,
+        seed=settings.seed,
+        wavelength_um=ds.wavelength * 1e6,
+    )
 
 
-def analyze(dataset, out, *, settings: AnalyzeSettings = AnalyzeSettings(), overwrite: bool = False,
-            executor=None) -> Path:
+def analyze(
+    dataset,
+    out,
+    *,
+    settings: AnalyzeSettings = AnalyzeSettings(),
+    overwrite: bool = False,
+    executor=None,
+) -> Path:
     """Restore, classify and invert a measured polarimetric dataset; returns the report path.
 
     Parameters
@@ -153,16 +185,24 @@ def analyze(dataset, out, *, settings: AnalyzeSettings = AnalyzeSettings(), over
     priors = PRIOR_SETS[settings.priors]
     acqs = _acquisitions(ds, settings)
     log_stage(f"restore {len(acqs)} geometries ({settings.psf} PSF)")
-    rs = RestoreSettings(settings.iterations, settings.psf_model, priors, True, str(folder.checkpoints))
+    rs = RestoreSettings(
+        settings.iterations, settings.psf_model, priors, True, str(folder.checkpoints)
+    )
     ex = executor if executor is not None else get_executor("serial")
-    rests = ex.map(_restore_task, [(a, rs, int(rng.integers(2**63)), _ideal()) for a in acqs],
-                   desc="restoration")
+    rests = ex.map(
+        _restore_task,
+        [(a, rs, int(rng.integers(2**63)), _ideal()) for a in acqs],
+        desc="restoration",
+    )
     thetas = np.asarray(ds.theta, float)
     mid = int(np.argmin(np.abs(np.degrees(thetas) - 50)))
     ref = register_restoration(rests[mid], thetas[mid], None)
     images = [register_restoration(r, th, ref.s0) for r, th in zip(rests, thetas)]
-    layout = images[mid].classes if images[mid].classes is not None else classify_dolp(
-        np.nan_to_num(images[mid].dolp), priors)
+    layout = (
+        images[mid].classes
+        if images[mid].classes is not None
+        else classify_dolp(np.nan_to_num(images[mid].dolp), priors)
+    )
     layout = (layout > 0).astype(int)
     shape = layout.shape
     sel = interior(shape, max(2, shape[0] // 16))
@@ -178,15 +218,33 @@ def analyze(dataset, out, *, settings: AnalyzeSettings = AnalyzeSettings(), over
         except ValueError as exc:  # the classification found (almost) none of this material
             missing.append(f"{'dielectric' if r == 'paint' else r}: {exc}")
     if not regions:
-        raise ValueError("no region of either material is large enough for an estimate: " + "; ".join(missing))
-    psfs = [resample_psf(r.psf, shape) if settings.psf == "blind" else a.psf_true for r, a in zip(rests, acqs)]
-    bias = restoration_bias(regions, layout, thetas, psfs, cfg, rng, sel, margin,
-                            blind=settings.psf == "blind", executor=executor)
+        raise ValueError(
+            "no region of either material is large enough for an estimate: " + "; ".join(missing)
+        )
+    psfs = [
+        resample_psf(r.psf, shape) if settings.psf == "blind" else a.psf_true
+        for r, a in zip(rests, acqs)
+    ]
+    bias = restoration_bias(
+        regions,
+        layout,
+        thetas,
+        psfs,
+        cfg,
+        rng,
+        sel,
+        margin,
+        blind=settings.psf == "blind",
+        executor=executor,
+    )
     regions = [bias_corrected(r, bias[r.name]) for r in regions]
-    estimates = region_posteriors(regions, thetas, settings.sigma, rng, n_steps=settings.posterior_steps,
-                                  executor=executor)
+    estimates = region_posteriors(
+        regions, thetas, settings.sigma, rng, n_steps=settings.posterior_steps, executor=executor
+    )
     maps = pixel_maps(stack, thetas, settings.sigma)
-    return _write(folder, ds, settings, images, layout, maps, estimates, time.perf_counter() - t0, missing)
+    return _write(
+        folder, ds, settings, images, layout, maps, estimates, time.perf_counter() - t0, missing
+    )
 
 
 def _ideal():
@@ -200,19 +258,27 @@ def _truths(ds) -> dict:
     t = ds.truth
     if t is None or not ds.simulated or len(t.n) < 2:
         return {}
-    return {"paint": (float(t.n[0]), float(t.kappa[0])), "metal": (float(t.n[1]), float(t.kappa[1]))}
+    return {
+        "paint": (float(t.n[0]), float(t.kappa[0])),
+        "metal": (float(t.n[1]), float(t.kappa[1])),
+    }
 
 
 def _write(folder, ds, settings, images, layout, maps, estimates, seconds, missing) -> Path:
+    import h5py
+
     from scatterlab.characterization.report import _save_png, _versions
     from scatterlab.runtime.results import write_json, write_text
-
-    import h5py
 
     tmp = folder.path / "results.h5.part"
     with h5py.File(tmp, "w") as f5:
         f5.attrs["settings"] = json.dumps(asdict(settings))
-        f5["layout"], f5["n"], f5["kappa"], f5["n_kappa_errors"] = layout, maps.n, maps.kappa, maps.errors
+        f5["layout"], f5["n"], f5["kappa"], f5["n_kappa_errors"] = (
+            layout,
+            maps.n,
+            maps.kappa,
+            maps.errors,
+        )
         for g, im in enumerate(images):
             gg = f5.create_group(f"geometry_{g}")
             gg["s0"], gg["dolp"] = im.s0, im.dolp
@@ -223,13 +289,29 @@ def _write(folder, ds, settings, images, layout, maps, estimates, seconds, missi
             gr["chain"] = e.chain
             gr.attrs["summary"] = json.dumps(e.parameters)
     tmp.replace(folder.path / "results.h5")
-    posts = {("dielectric" if e.name == "paint" else "metal"): dict(
-        e.parameters, converged=e.converged, warnings=e.warnings, dolp_mean=e.data.mean.tolist(),
-        dolp_error=e.data.error.tolist(), pixels=e.data.pixels) for e in estimates}
-    summary = {"title": ds.title, "source": ds.source, "simulated": bool(ds.simulated),
-               "settings": asdict(settings), "versions": _versions(), "seconds": seconds,
-               "theta_deg": np.degrees(ds.theta).tolist(), "posteriors": posts,
-               "metal_share": float(layout.mean()), "regions_left_out": missing}
+    posts = {
+        ("dielectric" if e.name == "paint" else "metal"): dict(
+            e.parameters,
+            converged=e.converged,
+            warnings=e.warnings,
+            dolp_mean=e.data.mean.tolist(),
+            dolp_error=e.data.error.tolist(),
+            pixels=e.data.pixels,
+        )
+        for e in estimates
+    }
+    summary = {
+        "title": ds.title,
+        "source": ds.source,
+        "simulated": bool(ds.simulated),
+        "settings": asdict(settings),
+        "versions": _versions(),
+        "seconds": seconds,
+        "theta_deg": np.degrees(ds.theta).tolist(),
+        "posteriors": posts,
+        "metal_share": float(layout.mean()),
+        "regions_left_out": missing,
+    }
     write_json(folder.path / "summary.json", summary, overwrite=True)
     _maps_figure(folder.path, images, layout, maps, ds, _save_png)
     text = _markdown(ds, settings, posts, seconds, missing)
@@ -249,56 +331,100 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
     plt = headless_pyplot()
     mid = int(np.argmin(np.abs(np.degrees(ds.theta) - 50)))
     fig, axes = plt.subplots(1, 5, figsize=(17, 3.6), layout="constrained")
-    panels = [(np.sqrt(np.clip(images[mid].s0, 0, None)), "gray", None, "sqrt(S0)"),
-              (images[mid].dolp, "viridis", (0, 1), "DOLP"), (layout, None, None, "regions"),
-              (maps.n, "magma", (0, 5), "n"), (maps.kappa, "magma", (0, 25), "kappa")]
+    panels = [
+        (np.sqrt(np.clip(images[mid].s0, 0, None)), "gray", None, "sqrt(S0)"),
+        (images[mid].dolp, "viridis", (0, 1), "DOLP"),
+        (layout, None, None, "regions"),
+        (maps.n, "magma", (0, 5), "n"),
+        (maps.kappa, "magma", (0, 25), "kappa"),
+    ]
     for ax, (img, cmap, lim, title) in zip(axes, panels):
         if title == "regions":
-            ax.imshow(img, cmap=ListedColormap(["#2e7d32", "#9e9e9e"]), vmin=-0.5, vmax=1.5,
-                      interpolation="nearest")
-            ax.legend(handles=[Patch(color="#2e7d32", label="dielectric"), Patch(color="#9e9e9e", label="metal")],
-                      fontsize=7, loc="lower right")
+            ax.imshow(
+                img,
+                cmap=ListedColormap(["#2e7d32", "#9e9e9e"]),
+                vmin=-0.5,
+                vmax=1.5,
+                interpolation="nearest",
+            )
+            ax.legend(
+                handles=[
+                    Patch(color="#2e7d32", label="dielectric"),
+                    Patch(color="#9e9e9e", label="metal"),
+                ],
+                fontsize=7,
+                loc="lower right",
+            )
         else:
-            im = ax.imshow(img, cmap=cmap, vmin=lim[0] if lim else None, vmax=lim[1] if lim else None)
+            im = ax.imshow(
+                img, cmap=cmap, vmin=lim[0] if lim else None, vmax=lim[1] if lim else None
+            )
             fig.colorbar(im, ax=ax, shrink=0.8)
-        ax.set(title=title if title in ("n", "kappa") else f"{title}, theta = {np.degrees(ds.theta[mid]):.0f} deg",
-               xticks=[], yticks=[])
-    fig.suptitle(f"{ds.title or 'dataset'}: object coordinates; n, kappa per pixel from all geometries",
-                 fontsize=9)
+        ax.set(
+            title=title
+            if title in ("n", "kappa")
+            else f"{title}, theta = {np.degrees(ds.theta[mid]):.0f} deg",
+            xticks=[],
+            yticks=[],
+        )
+    fig.suptitle(
+        f"{ds.title or 'dataset'}: object coordinates; n, kappa per pixel from all geometries",
+        fontsize=9,
+    )
     save_png(fig, Path(path) / "maps.png")
 
 
 def _markdown(ds, settings, posts, seconds, missing) -> str:
-    lines = [f"# Analysis: {ds.title or 'polarimetric dataset'}", "",
-             f"{ds.counts.shape[0]} specular geometries {np.round(np.degrees(ds.theta), 2).tolist()} deg, "
-             f"{ds.counts.shape[1]} channels, {ds.counts.shape[2]} x {ds.counts.shape[3]} pixels, "
-             f"{ds.wavelength * 1e6:g} um. Restoration: {settings.psf} PSF, {settings.iterations} EM iterations; "
-             f"priors {settings.priors}; sigma {settings.sigma} (known). Run time {seconds:.0f} s."
-             + (" **Simulated data: the truth is shown beside every estimate.**" if ds.simulated else ""),
-             "", f"{ds.description}", "",
-             "Posterior of n and kappa from each region's mean DOLP over the geometries (regions from the "
-             "classification at the geometry nearest 50 deg, eroded at their edges; error from the pixel "
-             "scatter, the edge sensitivity and the re-simulated restoration bias, plus an inferred noise):", "",
-             "| region | n [68 %] | n 95 % | kappa [68 %] | kappa 95 % |" + (" truth | covered 68 / 95 % |"
-                                                                          if ds.simulated else ""),
-             "|---|---|---|---|---|" + ("---|---|" if ds.simulated else "")]
+    lines = [
+        f"# Analysis: {ds.title or 'polarimetric dataset'}",
+        "",
+        f"{ds.counts.shape[0]} specular geometries {np.round(np.degrees(ds.theta), 2).tolist()} deg, "
+        f"{ds.counts.shape[1]} channels, {ds.counts.shape[2]} x {ds.counts.shape[3]} pixels, "
+        f"{ds.wavelength * 1e6:g} um. Restoration: {settings.psf} PSF, {settings.iterations} EM iterations; "
+        f"priors {settings.priors}; sigma {settings.sigma} (known). Run time {seconds:.0f} s."
+        + (
+            " **Simulated data: the truth is shown beside every estimate.**" if ds.simulated else ""
+        ),
+        "",
+        f"{ds.description}",
+        "",
+        "Posterior of n and kappa from each region's mean DOLP over the geometries (regions from the "
+        "classification at the geometry nearest 50 deg, eroded at their edges; error from the pixel "
+        "scatter, the edge sensitivity and the re-simulated restoration bias, plus an inferred noise):",
+        "",
+        "| region | n [68 %] | n 95 % | kappa [68 %] | kappa 95 % |"
+        + (" truth | covered 68 / 95 % |" if ds.simulated else ""),
+        "|---|---|---|---|---|" + ("---|---|" if ds.simulated else ""),
+    ]
     notes = []
     for region, p in posts.items():
         n, k = p["n"], p["kappa"]
-        row = (f"| {region}{'' if p['converged'] else ' (not converged)'} | {n['median']:.3f} "
-               f"[{n['ci68'][0]:.3f}, {n['ci68'][1]:.3f}] | [{n['ci95'][0]:.3f}, {n['ci95'][1]:.3f}] | "
-               f"{k['median']:.3f} [{k['ci68'][0]:.3f}, {k['ci68'][1]:.3f}] | "
-               f"[{k['ci95'][0]:.3f}, {k['ci95'][1]:.3f}] |")
+        row = (
+            f"| {region}{'' if p['converged'] else ' (not converged)'} | {n['median']:.3f} "
+            f"[{n['ci68'][0]:.3f}, {n['ci68'][1]:.3f}] | [{n['ci95'][0]:.3f}, {n['ci95'][1]:.3f}] | "
+            f"{k['median']:.3f} [{k['ci68'][0]:.3f}, {k['ci68'][1]:.3f}] | "
+            f"[{k['ci95'][0]:.3f}, {k['ci95'][1]:.3f}] |"
+        )
         if "truth" in n:
-            cov = " ".join(f"{q}: {'yes' if p[q]['covers68'] else '**no**'}/{'yes' if p[q]['covers95'] else '**no**'}"
-                           for q in ("n", "kappa"))
+            cov = " ".join(
+                f"{q}: {'yes' if p[q]['covers68'] else '**no**'}/{'yes' if p[q]['covers95'] else '**no**'}"
+                for q in ("n", "kappa")
+            )
             row += f" {n['truth']:.2f} - j{k['truth']:.2f} | {cov} |"
         elif ds.simulated:
             row += " - | - |"
         lines.append(row)
         notes += [f"- **{region}:** {w}" for w in p["warnings"]]
     notes += [f"- **Region left out**, {m}" for m in missing]
-    lines += [""] + notes + ["", "![maps](maps.png)", "",
-                             "Data: `results.h5` (registered S0, DOLP, classes per geometry; n, kappa maps; chains); "
-                             "every number: `summary.json`."]
+    lines += (
+        [""]
+        + notes
+        + [
+            "",
+            "![maps](maps.png)",
+            "",
+            "Data: `results.h5` (registered S0, DOLP, classes per geometry; n, kappa maps; chains); "
+            "every number: `summary.json`.",
+        ]
+    )
     return "\n".join(lines) + "\n"

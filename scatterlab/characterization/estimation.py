@@ -30,8 +30,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["RegionData", "RegionEstimate", "PixelMaps", "region_masks", "region_data", "pixel_maps",
-           "region_posteriors", "default_margin"]
+__all__ = [
+    "RegionData",
+    "RegionEstimate",
+    "PixelMaps",
+    "region_masks",
+    "region_data",
+    "pixel_maps",
+    "region_posteriors",
+    "default_margin",
+]
 
 PARAMS = ("n", "kappa")
 PIXEL_DOLP_MARGIN = 0.05  # per-pixel DOLP beyond [-0.05, 1.05] is treated as undefined
@@ -132,8 +140,10 @@ def region_data(name, stack, labels, interior, margin, thetas, truth=None) -> Re
         masks[k] = m & interior
     sel = masks[margin]
     if sel.sum() < 4:
-        raise ValueError(f"the {name} region has {int(sel.sum())} pixels after an erosion of {margin} pixels: "
-                         "too few for a region estimate (a larger image_size or a smaller margin)")
+        raise ValueError(
+            f"the {name} region has {int(sel.sum())} pixels after an erosion of {margin} pixels: "
+            "too few for a region estimate (a larger image_size or a smaller margin)"
+        )
     vals = stack[:, sel]
     mean = np.nanmean(vals, axis=1)
     cells = 4.0 / np.cos(np.asarray(thetas))  # pixels per resolution element (object coordinates)
@@ -161,11 +171,9 @@ def pixel_maps(stack, thetas, sigma) -> PixelMaps:
     -------
     PixelMaps
     """
-    from scatterlab.inversion import fit_dolp
-
     # a DOLP far outside [0, 1] is a dark pixel's noise, not a measurement: undefined (NaN), as the
     # convention for zero light says; fit_dolp masks NaN entries
-    from scatterlab.inversion import IdentifiabilityWarning
+    from scatterlab.inversion import IdentifiabilityWarning, fit_dolp
 
     y = np.where((stack >= -PIXEL_DOLP_MARGIN) & (stack <= 1 + PIXEL_DOLP_MARGIN), stack, np.nan)
     with warnings.catch_warnings():
@@ -187,15 +195,20 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
             entry["ci95"] = [float(x) for x in d["ci95"]]
         if data.truth is not None and p in PARAMS:
             t = float(data.truth[PARAMS.index(p)])
-            entry.update(truth=t, covers68=bool(entry["ci68"][0] <= t <= entry["ci68"][1]),
-                         covers95=bool(entry["ci95"][0] <= t <= entry["ci95"][1]))
+            entry.update(
+                truth=t,
+                covers68=bool(entry["ci68"][0] <= t <= entry["ci68"][1]),
+                covers95=bool(entry["ci95"][0] <= t <= entry["ci95"][1]),
+            )
         params[p] = entry
     notes = []
     diag = s.get("diagnostics", {})
     converged = bool(diag.get("converged", True))
     if not converged:
-        notes.append("the chain did not converge (too short for its autocorrelation time): "
-                     "the interval is a rough guide only")
+        notes.append(
+            "the chain did not converge (too short for its autocorrelation time): "
+            "the interval is a rough guide only"
+        )
     if diag.get("multimodal"):
         notes.append("the posterior has several modes: the median lies between them")
     return RegionEstimate(name, params, converged, notes, post.chain, data)

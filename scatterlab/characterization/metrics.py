@@ -16,8 +16,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab.characterization.estimation import (default_margin, pixel_maps, region_data, region_masks,
-                                                    region_posteriors)
+from scatterlab.characterization.estimation import (
+    default_margin,
+    pixel_maps,
+    region_data,
+    region_masks,
+    region_posteriors,
+)
 
 __all__ = ["score_plate", "rmse"]
 
@@ -40,7 +45,10 @@ def _image_errors(obs, case, kind, sel):
     ref_s0 = _stack(obs, "no_turbulence", "restored", "s0")
     dolp, s0 = _stack(obs, case, kind, "dolp"), _stack(obs, case, kind, "s0")
     sel3 = np.broadcast_to(sel, dolp.shape)
-    out = {"dolp_rmse_truth": rmse(dolp, truth_dolp, sel3), "dolp_rmse_no_turbulence": rmse(dolp, ref_dolp, sel3)}
+    out = {
+        "dolp_rmse_truth": rmse(dolp, truth_dolp, sel3),
+        "dolp_rmse_no_turbulence": rmse(dolp, ref_dolp, sel3),
+    }
     for name, target in (("truth", truth_s0), ("no_turbulence", ref_s0)):
         scaled = s0 * target[:, sel].sum() / max(float(s0[:, sel].sum()), 1e-300)
         out[f"s0_relative_rmse_{name}"] = rmse(scaled, target, sel3) / float(target[:, sel].mean())
@@ -54,9 +62,14 @@ def _classification(result, case, kind, mid, sel, priors):
     ref = classify_dolp(np.nan_to_num(o.images[("no_turbulence", "restored")].dolp), priors)
     cls = ref if (case, kind) == ("no_turbulence", "restored") else o.images[(case, kind)].classes
     metal = tuple(range(1, len(priors)))
-    return {"classification_vs_no_turbulence": classification_errors(cls, ref, metal_classes=metal, mask=sel),
-            "classification_vs_labels": classification_errors(cls, (result.labels > 0).astype(int),
-                                                              metal_classes=(1,), mask=sel)}
+    return {
+        "classification_vs_no_turbulence": classification_errors(
+            cls, ref, metal_classes=metal, mask=sel
+        ),
+        "classification_vs_labels": classification_errors(
+            cls, (result.labels > 0).astype(int), metal_classes=(1,), mask=sel
+        ),
+    }
 
 
 def _pixel_stats(maps, masks, truths):
@@ -64,12 +77,17 @@ def _pixel_stats(maps, masks, truths):
     for region, (tn, tk) in truths.items():
         m = masks[region]
         n, k = maps.n[m], maps.kappa[m]
-        out[region] = {"n_mean": float(np.nanmean(n)), "n_std": float(np.nanstd(n)),
-                       "kappa_mean": float(np.nanmean(k)), "kappa_std": float(np.nanstd(k)),
-                       "n_truth": tn, "kappa_truth": tk,
-                       "n_median_abs_error": float(np.nanmedian(np.abs(n - tn))),
-                       "kappa_median_abs_error": float(np.nanmedian(np.abs(k - tk))),
-                       "index_median_abs_error": float(np.nanmedian(np.hypot(n - tn, k - tk)))}
+        out[region] = {
+            "n_mean": float(np.nanmean(n)),
+            "n_std": float(np.nanstd(n)),
+            "kappa_mean": float(np.nanmean(k)),
+            "kappa_std": float(np.nanstd(k)),
+            "n_truth": tn,
+            "kappa_truth": tk,
+            "n_median_abs_error": float(np.nanmedian(np.abs(n - tn))),
+            "kappa_median_abs_error": float(np.nanmedian(np.abs(k - tk))),
+            "index_median_abs_error": float(np.nanmedian(np.hypot(n - tn, k - tk))),
+        }
     return out
 
 
@@ -83,10 +101,22 @@ def _self_calibrated(result, case, kind, regions, thetas, cfg, rng, sel, margin,
     ref = np.nan_to_num(obs[mid].images[("no_turbulence", "restored")].dolp)
     layout = classify_dolp(ref, PRIOR_SETS["ch7"])  # metal vs dielectric, from the data
     shape = result.labels.shape
-    psfs = [None if case == "no_turbulence" else resample_psf(o.restorations[(case, kind)].psf, shape)
-            for o in obs]
-    bias = restoration_bias(regions, layout, thetas, psfs, cfg, rng, sel, margin,
-                            blind=case != "no_turbulence", executor=executor)
+    psfs = [
+        None if case == "no_turbulence" else resample_psf(o.restorations[(case, kind)].psf, shape)
+        for o in obs
+    ]
+    bias = restoration_bias(
+        regions,
+        layout,
+        thetas,
+        psfs,
+        cfg,
+        rng,
+        sel,
+        margin,
+        blind=case != "no_turbulence",
+        executor=executor,
+    )
     return [bias_corrected(r, bias[r.name]) for r in regions]
 
 
@@ -99,9 +129,14 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
     shape = labels.shape
     sel = interior(shape, max(2, shape[0] // 16))
     mid = int(np.argmin(np.abs(np.degrees(thetas) - 50)))
-    margin = cfg.region_margin_px if cfg.region_margin_px is not None else default_margin(thetas.max())
+    margin = (
+        cfg.region_margin_px if cfg.region_margin_px is not None else default_margin(thetas.max())
+    )
     masks = region_masks(labels, sel, margin)
-    truths = {"paint": (plate.paint_n, plate.paint_kappa), "metal": (plate.metal_n, plate.metal_kappa)}
+    truths = {
+        "paint": (plate.paint_n, plate.paint_kappa),
+        "metal": (plate.metal_n, plate.metal_kappa),
+    }
     for key, case, kind in image_kinds(cfg):
         cs = _image_errors(obs, case, kind, sel)
         if priors:
@@ -114,14 +149,30 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
                 cs[plate.metal if region == "metal" else region] = stats
         if "posterior" in cfg.estimate and kind != "degraded":
             stack = _stack(obs, case, kind, "dolp")
-            regions = [region_data(r, stack, labels, sel, margin, thetas, truths[r]) for r in ("paint", "metal")]
-            regions = _self_calibrated(result, case, kind, regions, thetas, cfg, rng, sel, margin, executor)
-            est["regions"] = region_posteriors(regions, thetas, cfg.sigma_known, rng,
-                                               n_steps=cfg.posterior_steps, executor=executor)
+            regions = [
+                region_data(r, stack, labels, sel, margin, thetas, truths[r])
+                for r in ("paint", "metal")
+            ]
+            regions = _self_calibrated(
+                result, case, kind, regions, thetas, cfg, rng, sel, margin, executor
+            )
+            est["regions"] = region_posteriors(
+                regions,
+                thetas,
+                cfg.sigma_known,
+                rng,
+                n_steps=cfg.posterior_steps,
+                executor=executor,
+            )
             for r in est["regions"]:
                 name = plate.metal if r.name == "metal" else r.name
-                cs[f"posterior_{name}"] = dict(r.parameters, converged=r.converged, warnings=r.warnings,
-                                               dolp_mean=r.data.mean.tolist(), dolp_error=r.data.error.tolist(),
-                                               dolp_bias_corrected=r.data.bias.tolist())
+                cs[f"posterior_{name}"] = dict(
+                    r.parameters,
+                    converged=r.converged,
+                    warnings=r.warnings,
+                    dolp_mean=r.data.mean.tolist(),
+                    dolp_error=r.data.error.tolist(),
+                    dolp_bias_corrected=r.data.bias.tolist(),
+                )
         result.estimates[key] = est
         result.metrics[key] = cs

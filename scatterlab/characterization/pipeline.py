@@ -27,12 +27,20 @@ from pathlib import Path
 
 import numpy as np
 
-from scatterlab.characterization.acquisition import Acquisition, Ideal, acquire
-from scatterlab.characterization.registration import Registered, register_restoration
-from scatterlab.characterization.restoration import Restoration, RestoreSettings, degraded, restore
+from scatterlab.characterization.acquisition import Ideal, acquire
+from scatterlab.characterization.registration import register_restoration
+from scatterlab.characterization.restoration import RestoreSettings, degraded, restore
 from scatterlab.characterization.scene_config import SceneConfig
 
-__all__ = ["characterize", "observe", "Observation", "PlateResult", "run_plate", "interior", "log_stage"]
+__all__ = [
+    "characterize",
+    "observe",
+    "Observation",
+    "PlateResult",
+    "run_plate",
+    "interior",
+    "log_stage",
+]
 
 
 @dataclass
@@ -82,7 +90,7 @@ def log_stage(message: str) -> None:
 def interior(shape, margin):
     """Boolean mask of the pixels at least ``margin`` from the image edges (registration repeats edges)."""
     m = np.zeros(shape, bool)
-    m[margin:shape[0] - margin, margin:shape[1] - margin] = True
+    m[margin : shape[0] - margin, margin : shape[1] - margin] = True
     return m
 
 
@@ -97,8 +105,18 @@ def _restore_task(task):
     return restore(acq, settings, seed, ideal)
 
 
-def observe(plate, labels, thetas, cfg: SceneConfig, rng, *, priors=None, executor=None,
-            ideal: Ideal = Ideal(), checkpoint=None) -> list:
+def observe(
+    plate,
+    labels,
+    thetas,
+    cfg: SceneConfig,
+    rng,
+    *,
+    priors=None,
+    executor=None,
+    ideal: Ideal = Ideal(),
+    checkpoint=None,
+) -> list:
     """Acquire, restore and register one plate at each specular geometry (all cases of the scene).
 
     Parameters
@@ -124,8 +142,9 @@ def observe(plate, labels, thetas, cfg: SceneConfig, rng, *, priors=None, execut
     """
     from scatterlab.runtime import get_executor
 
-    settings = RestoreSettings(cfg.iterations, cfg.psf_model, priors, True,
-                               None if checkpoint is None else str(checkpoint))
+    settings = RestoreSettings(
+        cfg.iterations, cfg.psf_model, priors, True, None if checkpoint is None else str(checkpoint)
+    )
     obs, tasks = [], []
     for th in np.asarray(thetas, float):
         o = None
@@ -160,26 +179,42 @@ def _register(o: Observation, ideal: Ideal) -> None:
 def image_kinds(cfg: SceneConfig) -> list:
     """[(image key, case, kind)] in report order: the restored no-turbulence image (the reference), the
     unrestored one, then degraded and corrected per D/r0."""
-    kinds = [("no_turbulence", "no_turbulence", "restored"),
-             ("no_turbulence_unrestored", "no_turbulence", "degraded")]
+    kinds = [
+        ("no_turbulence", "no_turbulence", "restored"),
+        ("no_turbulence_unrestored", "no_turbulence", "degraded"),
+    ]
     for case, _ in cases_of(cfg)[1:]:
         kinds += [(f"{case}_degraded", case, "degraded"), (f"{case}_corrected", case, "corrected")]
     return kinds
 
 
-def run_plate(plate, cfg: SceneConfig, rng, *, executor=None, ideal: Ideal = Ideal(),
-              checkpoint=None) -> PlateResult:
+def run_plate(
+    plate, cfg: SceneConfig, rng, *, executor=None, ideal: Ideal = Ideal(), checkpoint=None
+) -> PlateResult:
     """The pipeline for one plate: acquire, restore, register, invert, and score against the truth."""
     from scatterlab.characterization import metrics
     from scatterlab.characterization.scene_config import plate_labels
     from scatterlab.deconvolution import PRIOR_SETS
 
     thetas = np.radians(cfg.geometry_deg)
-    priors = None if cfg.priors == "none" or "classes" not in cfg.estimate else PRIOR_SETS[cfg.priors]
+    priors = (
+        None if cfg.priors == "none" or "classes" not in cfg.estimate else PRIOR_SETS[cfg.priors]
+    )
     labels = plate_labels(cfg, rng)
-    log_stage(f"{plate.metal}: acquire and restore {len(thetas)} geometries x {len(cases_of(cfg))} cases")
-    obs = observe(plate, labels, thetas, cfg, rng, priors=priors, executor=executor, ideal=ideal,
-                  checkpoint=checkpoint)
+    log_stage(
+        f"{plate.metal}: acquire and restore {len(thetas)} geometries x {len(cases_of(cfg))} cases"
+    )
+    obs = observe(
+        plate,
+        labels,
+        thetas,
+        cfg,
+        rng,
+        priors=priors,
+        executor=executor,
+        ideal=ideal,
+        checkpoint=checkpoint,
+    )
     if ideal.classes and priors:
         for o in obs:
             for img in o.images.values():
@@ -190,8 +225,9 @@ def run_plate(plate, cfg: SceneConfig, rng, *, executor=None, ideal: Ideal = Ide
     return result
 
 
-def characterize(cfg: SceneConfig, out, *, overwrite: bool = False, executor=None,
-                 ideal: Ideal = Ideal()) -> Path:
+def characterize(
+    cfg: SceneConfig, out, *, overwrite: bool = False, executor=None, ideal: Ideal = Ideal()
+) -> Path:
     """Run the pipeline for ``cfg`` into the folder ``out``; returns the report path.
 
     Parameters
@@ -218,8 +254,11 @@ def characterize(cfg: SceneConfig, out, *, overwrite: bool = False, executor=Non
     rng = np.random.default_rng(cfg.seed)
     results = []
     for plate in cfg.plates:
-        results.append(run_plate(plate, cfg, rng, executor=executor, ideal=ideal,
-                                 checkpoint=folder.checkpoints))
+        results.append(
+            run_plate(
+                plate, cfg, rng, executor=executor, ideal=ideal, checkpoint=folder.checkpoints
+            )
+        )
         log_stage(f"{plate.metal}: figure")
         report.plate_figure(folder.path, results[-1], cfg)
     log_stage("report")

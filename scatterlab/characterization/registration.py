@@ -17,14 +17,23 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["foreshorten", "keystone_correct", "estimate_shift", "apply_shift", "register", "Registered",
-           "register_restoration"]
+__all__ = [
+    "foreshorten",
+    "keystone_correct",
+    "estimate_shift",
+    "apply_shift",
+    "register",
+    "Registered",
+    "register_restoration",
+]
 
 
 def _check_theta(theta_r):
     theta_r = float(theta_r)
     if not 0 <= theta_r < np.radians(89.0):
-        raise ValueError(f"theta_r must be in [0, 89) deg for registration, got {np.degrees(theta_r):.3g} deg")
+        raise ValueError(
+            f"theta_r must be in [0, 89) deg for registration, got {np.degrees(theta_r):.3g} deg"
+        )
     return theta_r
 
 
@@ -38,7 +47,9 @@ def foreshorten(labels, theta_r) -> np.ndarray:
     neighbour; columns beyond the map repeat its edge, the plate being larger than the field)."""
     labels = np.asarray(labels)
     H, W = labels.shape[-2:]
-    x = np.clip(np.rint(_column_coordinates(W, 1 / np.cos(_check_theta(theta_r)))), 0, W - 1).astype(int)
+    x = np.clip(
+        np.rint(_column_coordinates(W, 1 / np.cos(_check_theta(theta_r)))), 0, W - 1
+    ).astype(int)
     return labels[..., x]
 
 
@@ -63,7 +74,9 @@ def estimate_shift(reference, image, max_shift=None) -> np.ndarray:
     a = np.asarray(reference, float)
     b = np.asarray(image, float)
     if a.shape != b.shape or a.ndim != 2:
-        raise ValueError(f"reference {a.shape} and image {b.shape} must be 2-D images of the same shape")
+        raise ValueError(
+            f"reference {a.shape} and image {b.shape} must be 2-D images of the same shape"
+        )
     max_shift = min(a.shape) / 4 if max_shift is None else float(max_shift)
     c = np.fft.irfft2(np.fft.rfft2(a - a.mean()) * np.conj(np.fft.rfft2(b - b.mean())), s=a.shape)
     size = np.array(c.shape)
@@ -136,7 +149,9 @@ class Registered:
     shift: np.ndarray
 
 
-def register_restoration(rest, theta_r, reference=None, *, foreshortened: bool = True) -> Registered:
+def register_restoration(
+    rest, theta_r, reference=None, *, foreshortened: bool = True
+) -> Registered:
     """Keystone-correct a :class:`~scatterlab.characterization.restoration.Restoration` and align it with the
     object-coordinate image ``reference`` (None: no translation).
 
@@ -159,9 +174,16 @@ def register_restoration(rest, theta_r, reference=None, *, foreshortened: bool =
     dolp = np.nan_to_num(rest.dolp, nan=0.0)
     if foreshortened:
         s0, dolp = keystone_correct(rest.s0, theta_r), keystone_correct(dolp, theta_r)
-        cls = None if rest.classes is None else keystone_correct(rest.classes.astype(float), theta_r, order=0)
+        cls = (
+            None
+            if rest.classes is None
+            else keystone_correct(rest.classes.astype(float), theta_r, order=0)
+        )
     else:
-        s0, cls = np.asarray(rest.s0, float), None if rest.classes is None else rest.classes.astype(float)
+        s0, cls = (
+            np.asarray(rest.s0, float),
+            None if rest.classes is None else rest.classes.astype(float),
+        )
     shift = np.zeros(2) if reference is None else estimate_shift(reference, s0)
     if reference is not None:
         s0, dolp = apply_shift(s0, shift), apply_shift(dolp, shift)

@@ -22,7 +22,11 @@ from scatterlab.characterization.pipeline import image_kinds
 
 __all__ = ["RunFolder", "plate_figure", "write_all", "acceptance_checks"]
 
-CLASS_COLOURS = ("#2e7d32", "#9e9e9e", "#1565c0")  # dielectric (paint) green, metal grey, second metal blue
+CLASS_COLOURS = (
+    "#2e7d32",
+    "#9e9e9e",
+    "#1565c0",
+)  # dielectric (paint) green, metal grey, second metal blue
 
 
 class RunFolder:
@@ -46,7 +50,9 @@ class RunFolder:
             raise ValueError(f"--out {self.path} cannot be written: {exc.strerror}") from None
         self.report = self.path / "report.md"
         if self.report.exists() and not overwrite:
-            raise FileExistsError(f"{self.report} exists (a finished run); pass overwrite=True (CLI: --force)")
+            raise FileExistsError(
+                f"{self.report} exists (a finished run); pass overwrite=True (CLI: --force)"
+            )
         if self.report.exists():
             self.report.unlink()  # from here on the folder holds an unfinished run
 
@@ -57,8 +63,13 @@ def _versions() -> dict:
 
     import scatterlab
 
-    return {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
-            "emcee": emcee.__version__, "scatterlab": getattr(scatterlab, "__version__", "unknown")}
+    return {
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "emcee": emcee.__version__,
+        "scatterlab": getattr(scatterlab, "__version__", "unknown"),
+    }
 
 
 def _save_png(fig, path: Path) -> None:
@@ -95,8 +106,13 @@ def plate_figure(out, result, cfg) -> Path:
     o = result.observations[mid]
     rows = ["S0", "DOLP"] + (["classes"] if o.images[kinds[-1][1:]].classes is not None else [])
     rows += ["n", "kappa"] if "n_kappa" in cfg.estimate else []
-    fig, axes = plt.subplots(len(rows), len(kinds), figsize=(2.6 * len(kinds) + 1, 2.5 * len(rows)),
-                             squeeze=False, layout="constrained")
+    fig, axes = plt.subplots(
+        len(rows),
+        len(kinds),
+        figsize=(2.6 * len(kinds) + 1, 2.5 * len(rows)),
+        squeeze=False,
+        layout="constrained",
+    )
     ncls = 1 + len(cfg.priors == "ch6" and (1, 2) or (1,))
     cmap_cls = ListedColormap(CLASS_COLOURS[:ncls])
     for j, (key, case, kind) in enumerate(kinds):
@@ -109,15 +125,23 @@ def plate_figure(out, result, cfg) -> Path:
             elif row == "DOLP":
                 im = ax.imshow(img.dolp, vmin=0, vmax=1, cmap="viridis")
             elif row == "classes":
-                im = ax.imshow(img.classes if key != "no_turbulence" else _ref_classes(result, mid, cfg),
-                               cmap=cmap_cls, vmin=-0.5, vmax=ncls - 0.5, interpolation="nearest")
+                im = ax.imshow(
+                    img.classes if key != "no_turbulence" else _ref_classes(result, mid, cfg),
+                    cmap=cmap_cls,
+                    vmin=-0.5,
+                    vmax=ncls - 0.5,
+                    interpolation="nearest",
+                )
             else:
-                im = ax.imshow(getattr(maps, row), vmin=0, vmax=5 if row == "n" else 25, cmap="magma")
+                im = ax.imshow(
+                    getattr(maps, row), vmin=0, vmax=5 if row == "n" else 25, cmap="magma"
+                )
             ax.set_xticks([])
             ax.set_yticks([])
             if j == len(kinds) - 1 and row != "classes":
-                fig.colorbar(im, ax=axes[i, :], shrink=0.8,
-                             label={"S0": "sqrt(S0) [sqrt(e-)]"}.get(row, row))
+                fig.colorbar(
+                    im, ax=axes[i, :], shrink=0.8, label={"S0": "sqrt(S0) [sqrt(e-)]"}.get(row, row)
+                )
         axes[0, j].set_title(_title(key), fontsize=8)
     for i, row in enumerate(rows):
         axes[i, 0].set_ylabel(row, fontsize=9)
@@ -125,9 +149,15 @@ def plate_figure(out, result, cfg) -> Path:
         names = ["dielectric"] + (["aluminium", "iron"] if cfg.priors == "ch6" else ["metal"])
         axes[rows.index("classes"), -1].legend(
             handles=[Patch(color=c, label=n) for c, n in zip(CLASS_COLOURS, names)],
-            loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize=8)
-    fig.suptitle(f"{result.plate.metal} plate: images at theta = {cfg.geometry_deg[mid]} deg; n, kappa from "
-                 "all geometries; object coordinates", fontsize=9)
+            loc="center left",
+            bbox_to_anchor=(1.02, 0.5),
+            fontsize=8,
+        )
+    fig.suptitle(
+        f"{result.plate.metal} plate: images at theta = {cfg.geometry_deg[mid]} deg; n, kappa from "
+        "all geometries; object coordinates",
+        fontsize=9,
+    )
     path = Path(out) / f"{result.plate.metal}.png"
     _save_png(fig, path)
     return path
@@ -154,7 +184,11 @@ def _write_h5(path: Path, cfg, results) -> None:
                     continue
                 gk = g.require_group(key)
                 if "maps" in est:
-                    gk["n"], gk["kappa"], gk["n_kappa_errors"] = est["maps"].n, est["maps"].kappa, est["maps"].errors
+                    gk["n"], gk["kappa"], gk["n_kappa_errors"] = (
+                        est["maps"].n,
+                        est["maps"].kappa,
+                        est["maps"].errors,
+                    )
                 for r in est.get("regions", ()):
                     name = res.plate.metal if r.name == "metal" else r.name
                     gr = gk.create_group(f"posterior_{name}")
@@ -172,9 +206,15 @@ def _write_h5(path: Path, cfg, results) -> None:
                         if c != case:
                             continue
                         rest = o.restorations[(c, kind)]
-                        for name, val in (("s0", img.s0), ("dolp", img.dolp), ("classes", img.classes),
-                                          ("shift", img.shift), ("psf", rest.psf), ("loglik", rest.loglik),
-                                          ("loglik_classes", rest.loglik_classes)):
+                        for name, val in (
+                            ("s0", img.s0),
+                            ("dolp", img.dolp),
+                            ("classes", img.classes),
+                            ("shift", img.shift),
+                            ("psf", rest.psf),
+                            ("loglik", rest.loglik),
+                            ("loglik_classes", rest.loglik_classes),
+                        ):
                             if val is not None:
                                 gc[f"{name}_{kind}"] = val
     tmp.replace(path)
@@ -189,32 +229,67 @@ def acceptance_checks(cfg, results) -> list:
         if "paint" in nt:
             for q in ("n", "kappa"):
                 err = abs(nt["paint"][f"{q}_mean"] - nt["paint"][f"{q}_truth"])
-                out.append((f"{p.metal}: paint per-pixel mean {q} within 0.05 of the truth (no turbulence)",
-                            f"|error| {err:.3f}", err <= 0.05))
+                out.append(
+                    (
+                        f"{p.metal}: paint per-pixel mean {q} within 0.05 of the truth (no turbulence)",
+                        f"|error| {err:.3f}",
+                        err <= 0.05,
+                    )
+                )
         for region in ("paint", p.metal):
             post = nt.get(f"posterior_{region}")
             if post:
                 for q in ("n", "kappa"):
                     e = post[q]
-                    out.append((f"{p.metal}: {region} posterior 68 % interval of {q} covers the truth "
-                                "(no turbulence)", f"{e['median']:.3f} [{e['ci68'][0]:.3f}, {e['ci68'][1]:.3f}]"
-                                f", truth {e['truth']:.3f}", bool(e["covers68"])))
+                    out.append(
+                        (
+                            f"{p.metal}: {region} posterior 68 % interval of {q} covers the truth "
+                            "(no turbulence)",
+                            f"{e['median']:.3f} [{e['ci68'][0]:.3f}, {e['ci68'][1]:.3f}]"
+                            f", truth {e['truth']:.3f}",
+                            bool(e["covers68"]),
+                        )
+                    )
         for case, _ in [(c, None) for c in cfg.d_over_r0]:
             key = f"D_r0_{case:g}"
             cor, deg = m.get(f"{key}_corrected", {}), m.get(f"{key}_degraded", {})
             c = cor.get("classification_vs_no_turbulence")
             if c:
-                out.append((f"{p.metal}, D/r0 = {case:g}: corrected vs no-turbulence classification error "
-                            "<= 0.06", f"{c['total_error']:.4f}", c["total_error"] <= 0.06))
-            for metric in ("dolp_rmse_truth", "dolp_rmse_no_turbulence", "s0_relative_rmse_truth",
-                           "s0_relative_rmse_no_turbulence"):
-                out.append((f"{p.metal}, D/r0 = {case:g}: corrected better than degraded in {metric}",
-                            f"{cor[metric]:.4f} vs {deg[metric]:.4f}", cor[metric] < deg[metric]))
+                out.append(
+                    (
+                        f"{p.metal}, D/r0 = {case:g}: corrected vs no-turbulence classification error "
+                        "<= 0.06",
+                        f"{c['total_error']:.4f}",
+                        c["total_error"] <= 0.06,
+                    )
+                )
+            for metric in (
+                "dolp_rmse_truth",
+                "dolp_rmse_no_turbulence",
+                "s0_relative_rmse_truth",
+                "s0_relative_rmse_no_turbulence",
+            ):
+                out.append(
+                    (
+                        f"{p.metal}, D/r0 = {case:g}: corrected better than degraded in {metric}",
+                        f"{cor[metric]:.4f} vs {deg[metric]:.4f}",
+                        cor[metric] < deg[metric],
+                    )
+                )
             for region in ("paint", p.metal):
                 if region in cor:
-                    a, b = cor[region]["index_median_abs_error"], deg[region]["index_median_abs_error"]
-                    out.append((f"{p.metal}, D/r0 = {case:g}: deconvolution does not worsen the {region}'s "
-                                "median |eta error|", f"{a:.3f} vs {b:.3f}", a <= b))
+                    a, b = (
+                        cor[region]["index_median_abs_error"],
+                        deg[region]["index_median_abs_error"],
+                    )
+                    out.append(
+                        (
+                            f"{p.metal}, D/r0 = {case:g}: deconvolution does not worsen the {region}'s "
+                            "median |eta error|",
+                            f"{a:.3f} vs {b:.3f}",
+                            a <= b,
+                        )
+                    )
     return out
 
 
@@ -225,11 +300,17 @@ def write_all(folder: RunFolder, cfg, results, *, seconds: float, ideal) -> Path
 
     _write_h5(folder.path / "results.h5", cfg, results)
     checks = acceptance_checks(cfg, results)
-    summary = {"title": cfg.title, "scene": asdict(cfg), "seed": cfg.seed, "versions": _versions(),
-               "ideal": ideal.label(), "seconds": seconds,
-               "cases": ["no_turbulence"] + [f"D_r0_{x:g}" for x in cfg.d_over_r0],
-               "plates": {r.plate.metal: r.metrics for r in results},
-               "checks": [{"check": c, "value": v, "passed": bool(ok)} for c, v, ok in checks]}
+    summary = {
+        "title": cfg.title,
+        "scene": asdict(cfg),
+        "seed": cfg.seed,
+        "versions": _versions(),
+        "ideal": ideal.label(),
+        "seconds": seconds,
+        "cases": ["no_turbulence"] + [f"D_r0_{x:g}" for x in cfg.d_over_r0],
+        "plates": {r.plate.metal: r.metrics for r in results},
+        "checks": [{"check": c, "value": v, "passed": bool(ok)} for c, v, ok in checks],
+    }
     write_json(folder.path / "summary.json", summary, overwrite=True)
     text = report_markdown(cfg, results, checks, seconds=seconds, ideal=ideal)
     report = write_text(folder.report, text, overwrite=True)

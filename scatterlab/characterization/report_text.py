@@ -7,47 +7,64 @@ __all__ = ["report_markdown"]
 
 def _header(cfg, seconds, ideal) -> list:
     ideal_note = "" if ideal.label() == "none" else f" **Ideal stages: {ideal.label()}.**"
-    return [f"# Characterization: {cfg.title}", "",
-            f"{cfg.wavelength_um:g} um, specular geometries {cfg.geometry_deg} deg, D/r0 {cfg.d_over_r0}, "
-            f"{cfg.photons:g} photo-electrons at the brightest channel pixel, {cfg.read_noise:g} e- read noise, "
-            f"{cfg.image_size}^2 pixels (2 per lambda/D), polarizers {cfg.polarizer_deg} deg, "
-            f"{cfg.iterations} EM iterations ({cfg.psf_model} PSFs), priors {cfg.priors}, sigma "
-            f"{cfg.sigma_known} (known), seed {cfg.seed}. Run time {seconds:.0f} s.{ideal_note}", "",
-            "The no-turbulence image is deconvolved with its known diffraction-limited PSF (`no turbulence`) "
-            "and is the reference the others are compared with; `raw` is the same image without restoration. "
-            "Images are keystone-corrected to object coordinates and aligned with the reference; statistics "
-            "exclude a border of 1/16 of the image, and region statistics a margin at the paint/metal edges. "
-            "This is a simulation: the truth is shown beside every estimate. Bracketed numbers are the "
-            "reference text's measured Tables 4 and 5 (real plates: the trend to expect, not numbers to "
-            "match). Data: `results.h5`; every number: `summary.json`.", ""]
+    return [
+        f"# Characterization: {cfg.title}",
+        "",
+        f"{cfg.wavelength_um:g} um, specular geometries {cfg.geometry_deg} deg, D/r0 {cfg.d_over_r0}, "
+        f"{cfg.photons:g} photo-electrons at the brightest channel pixel, {cfg.read_noise:g} e- read noise, "
+        f"{cfg.image_size}^2 pixels (2 per lambda/D), polarizers {cfg.polarizer_deg} deg, "
+        f"{cfg.iterations} EM iterations ({cfg.psf_model} PSFs), priors {cfg.priors}, sigma "
+        f"{cfg.sigma_known} (known), seed {cfg.seed}. Run time {seconds:.0f} s.{ideal_note}",
+        "",
+        "The no-turbulence image is deconvolved with its known diffraction-limited PSF (`no turbulence`) "
+        "and is the reference the others are compared with; `raw` is the same image without restoration. "
+        "Images are keystone-corrected to object coordinates and aligned with the reference; statistics "
+        "exclude a border of 1/16 of the image, and region statistics a margin at the paint/metal edges. "
+        "This is a simulation: the truth is shown beside every estimate. Bracketed numbers are the "
+        "reference text's measured Tables 4 and 5 (real plates: the trend to expect, not numbers to "
+        "match). Data: `results.h5`; every number: `summary.json`.",
+        "",
+    ]
 
 
 def _errors_table(psum) -> list:
-    lines = ["| image | DOLP RMSE vs truth | DOLP RMSE vs no turbulence | S0 rel. RMSE vs truth | "
-             "S0 rel. RMSE vs no turbulence |", "|---|---|---|---|---|"]
+    lines = [
+        "| image | DOLP RMSE vs truth | DOLP RMSE vs no turbulence | S0 rel. RMSE vs truth | "
+        "S0 rel. RMSE vs no turbulence |",
+        "|---|---|---|---|---|",
+    ]
     for key, cs in psum.items():
-        lines.append(f"| {key} | {cs['dolp_rmse_truth']:.3f} | {cs['dolp_rmse_no_turbulence']:.3f} | "
-                     f"{cs['s0_relative_rmse_truth']:.3f} | {cs['s0_relative_rmse_no_turbulence']:.3f} |")
+        lines.append(
+            f"| {key} | {cs['dolp_rmse_truth']:.3f} | {cs['dolp_rmse_no_turbulence']:.3f} | "
+            f"{cs['s0_relative_rmse_truth']:.3f} | {cs['s0_relative_rmse_no_turbulence']:.3f} |"
+        )
     return lines
 
 
 def _classification_table(plate, psum, mid_deg) -> list:
     from scatterlab.characterization.reference_tables import TABLE4
 
-    lines = ["", f"Classification at {mid_deg} deg against the no-turbulence classification, in Table 4's "
-             "columns (wrongly metal per dielectric pixel, wrongly dielectric per metal pixel, total over all "
-             "pixels), and the total error against the true labels:", "",
-             "| image | wrongly metal | wrongly dielectric | total [Table 4] | corr. coef. | RMSE | "
-             "total vs labels |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        "",
+        f"Classification at {mid_deg} deg against the no-turbulence classification, in Table 4's "
+        "columns (wrongly metal per dielectric pixel, wrongly dielectric per metal pixel, total over all "
+        "pixels), and the total error against the true labels:",
+        "",
+        "| image | wrongly metal | wrongly dielectric | total [Table 4] | corr. coef. | RMSE | "
+        "total vs labels |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for key, cs in psum.items():
         c = cs.get("classification_vs_no_turbulence")
         if c is None or key.startswith("no_turbulence"):
             continue
         ref = TABLE4.get(plate, {}).get(key)
         refs = f" [{ref[2]:.4f}]" if ref else ""
-        lines.append(f"| {key} | {c['false_metal_rate']:.4f} | {c['false_dielectric_rate']:.4f} | "
-                     f"{c['total_error']:.4f}{refs} | {c['correlation']:.4f} | {c['rmse']:.4f} | "
-                     f"{cs['classification_vs_labels']['total_error']:.4f} |")
+        lines.append(
+            f"| {key} | {c['false_metal_rate']:.4f} | {c['false_dielectric_rate']:.4f} | "
+            f"{c['total_error']:.4f}{refs} | {c['correlation']:.4f} | {c['rmse']:.4f} | "
+            f"{cs['classification_vs_labels']['total_error']:.4f} |"
+        )
     return lines
 
 
@@ -55,12 +72,17 @@ def _pixel_table(plate, psum) -> list:
     from scatterlab.characterization.reference_tables import TABLE5
 
     first = next(cs for cs in psum.values() if "paint" in cs)
-    lines = ["", "n and kappa per pixel: mean and standard deviation over each region (Table 5) and the "
-             "median over its pixels of |eta - eta_true|. Truth: paint "
-             f"{first['paint']['n_truth']:.2f} - j{first['paint']['kappa_truth']:.2f}, {plate} "
-             f"{first[plate]['n_truth']:.2f} - j{first[plate]['kappa_truth']:.2f}.", "",
-             "| image | paint E[n] | sd | E[kappa] | sd | metal E[n] | sd | E[kappa] | sd | "
-             "paint median abs. error | metal median abs. error |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "",
+        "n and kappa per pixel: mean and standard deviation over each region (Table 5) and the "
+        "median over its pixels of |eta - eta_true|. Truth: paint "
+        f"{first['paint']['n_truth']:.2f} - j{first['paint']['kappa_truth']:.2f}, {plate} "
+        f"{first[plate]['n_truth']:.2f} - j{first[plate]['kappa_truth']:.2f}.",
+        "",
+        "| image | paint E[n] | sd | E[kappa] | sd | metal E[n] | sd | E[kappa] | sd | "
+        "paint median abs. error | metal median abs. error |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for key, cs in psum.items():
         if "paint" not in cs:
             continue
@@ -69,7 +91,9 @@ def _pixel_table(plate, psum) -> list:
             d = cs[region]
             ref = TABLE5.get(plate, {}).get(rkey, {}).get(key)
             vals = (d["n_mean"], d["n_std"], d["kappa_mean"], d["kappa_std"])
-            cells += [f"{v:.3f}" + (f" [{r:.3g}]" if ref else "") for v, r in zip(vals, ref or vals)]
+            cells += [
+                f"{v:.3f}" + (f" [{r:.3g}]" if ref else "") for v, r in zip(vals, ref or vals)
+            ]
         cells += [f"{cs[r]['index_median_abs_error']:.3f}" for r in ("paint", plate)]
         lines.append(f"| {key} | " + " | ".join(cells) + " |")
     return lines
@@ -79,23 +103,32 @@ def _posterior_lines(plate, psum) -> list:
     post = {k: cs for k, cs in psum.items() if "posterior_paint" in cs}
     if not post:
         return []
-    lines = ["", "Posterior of n and kappa from each region's mean DOLP over the geometries (its error from "
-             "the pixel scatter and the edge sensitivity, plus an inferred noise): median, 68 % and 95 % "
-             "intervals, the truth, and whether the intervals cover it:", "",
-             "| image | region | n [68 %] | n 95 % | kappa [68 %] | kappa 95 % | truth | covered 68 / 95 % |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "",
+        "Posterior of n and kappa from each region's mean DOLP over the geometries (its error from "
+        "the pixel scatter and the edge sensitivity, plus an inferred noise): median, 68 % and 95 % "
+        "intervals, the truth, and whether the intervals cover it:",
+        "",
+        "| image | region | n [68 %] | n 95 % | kappa [68 %] | kappa 95 % | truth | covered 68 / 95 % |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     notes = []
     for key, cs in post.items():
         for region in ("paint", plate):
             p = cs[f"posterior_{region}"]
             n, k = p["n"], p["kappa"]
-            cov = " ".join(f"{q}: {'yes' if p[q]['covers68'] else '**no**'}/"
-                           f"{'yes' if p[q]['covers95'] else '**no**'}" for q in ("n", "kappa"))
+            cov = " ".join(
+                f"{q}: {'yes' if p[q]['covers68'] else '**no**'}/"
+                f"{'yes' if p[q]['covers95'] else '**no**'}"
+                for q in ("n", "kappa")
+            )
             flag = "" if p["converged"] else " (not converged)"
-            lines.append(f"| {key} | {region}{flag} | {n['median']:.3f} [{n['ci68'][0]:.3f}, {n['ci68'][1]:.3f}] "
-                         f"| [{n['ci95'][0]:.3f}, {n['ci95'][1]:.3f}] | {k['median']:.3f} [{k['ci68'][0]:.3f}, "
-                         f"{k['ci68'][1]:.3f}] | [{k['ci95'][0]:.3f}, {k['ci95'][1]:.3f}] | "
-                         f"{n['truth']:.2f} - j{k['truth']:.2f} | {cov} |")
+            lines.append(
+                f"| {key} | {region}{flag} | {n['median']:.3f} [{n['ci68'][0]:.3f}, {n['ci68'][1]:.3f}] "
+                f"| [{n['ci95'][0]:.3f}, {n['ci95'][1]:.3f}] | {k['median']:.3f} [{k['ci68'][0]:.3f}, "
+                f"{k['ci68'][1]:.3f}] | [{k['ci95'][0]:.3f}, {k['ci95'][1]:.3f}] | "
+                f"{n['truth']:.2f} - j{k['truth']:.2f} | {cov} |"
+            )
             notes += [f"- **{key}, {region}:** {w}" for w in p["warnings"]]
     return lines + ([""] + notes if notes else [])
 
@@ -109,8 +142,13 @@ def report_markdown(cfg, results, checks, *, seconds, ideal) -> str:
     mid_deg = cfg.geometry_deg[int(np.argmin(np.abs(np.asarray(cfg.geometry_deg) - 50)))]
     for res in results:
         plate, psum = res.plate.metal, res.metrics
-        lines += [f"## {plate} plate", "", "Errors against the object (truth) and against the restored "
-                  "no-turbulence image (S0 flux-normalised):", ""]
+        lines += [
+            f"## {plate} plate",
+            "",
+            "Errors against the object (truth) and against the restored "
+            "no-turbulence image (S0 flux-normalised):",
+            "",
+        ]
         lines += _errors_table(psum)
         if any("classification_vs_no_turbulence" in cs for cs in psum.values()):
             lines += _classification_table(plate, psum, mid_deg)
@@ -120,9 +158,14 @@ def report_markdown(cfg, results, checks, *, seconds, ideal) -> str:
         lines += ["", f"![{plate}]({plate}.png)", ""]
     if checks:
         failed = sum(not ok for _, _, ok in checks)
-        lines += ["## Checks against the truth", "",
-                  f"{len(checks) - failed} of {len(checks)} checks pass" + (":" if not failed else
-                                                                           f"; **{failed} fail**:"), "",
-                  "| check | value | result |", "|---|---|---|"]
+        lines += [
+            "## Checks against the truth",
+            "",
+            f"{len(checks) - failed} of {len(checks)} checks pass"
+            + (":" if not failed else f"; **{failed} fail**:"),
+            "",
+            "| check | value | result |",
+            "|---|---|---|",
+        ]
         lines += [f"| {c} | {v} | {'pass' if ok else '**FAIL**'} |" for c, v, ok in checks]
     return "\n".join(lines) + "\n"

@@ -31,7 +31,14 @@ import numpy as np
 
 from scatterlab.characterization.acquisition import Acquisition, Ideal
 
-__all__ = ["Restoration", "RestoreSettings", "restore", "degraded", "signed_dolp", "KNOWN_PSF_ITERATIONS"]
+__all__ = [
+    "Restoration",
+    "RestoreSettings",
+    "restore",
+    "degraded",
+    "signed_dolp",
+    "KNOWN_PSF_ITERATIONS",
+]
 
 KNOWN_PSF_ITERATIONS = 100
 
@@ -116,8 +123,19 @@ def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int
     if ideal.psf or acq.d_over_r0 is None:
         h.update(np.ascontiguousarray(acq.psf_true).tobytes())
     pri = tuple((p.c2, p.c3, p.m, p.name) for p in settings.priors or ())
-    h.update(repr((settings.iterations, settings.psf_model, pri, settings.restore_reference,
-                   ideal.psf, seed, acq.d_over_r0)).encode())
+    h.update(
+        repr(
+            (
+                settings.iterations,
+                settings.psf_model,
+                pri,
+                settings.restore_reference,
+                ideal.psf,
+                seed,
+                acq.d_over_r0,
+            )
+        ).encode()
+    )
     return h.hexdigest()[:24]
 
 
@@ -144,14 +162,25 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     classes, loglik_classes = None, np.zeros(0)
     if settings.priors:
         steps = max(10, settings.iterations // 5)
-        cont = blind_deconvolve(acq.counts, acq.angles, psf0=ml.psfs[0], psf_mode="fixed", iterations=steps,
-                                priors=settings.priors, s0_start=ml.s0, dolp_start=ml.dolp, **kw)
+        cont = blind_deconvolve(
+            acq.counts,
+            acq.angles,
+            psf0=ml.psfs[0],
+            psf_mode="fixed",
+            iterations=steps,
+            priors=settings.priors,
+            s0_start=ml.s0,
+            dolp_start=ml.dolp,
+            **kw,
+        )
         classes, loglik_classes = cont.classes, cont.loglik
     dolp = np.where(ml.s0 > 0, ml.dolp, np.nan)
     return ml.s0, dolp, classes, ml.psfs[0], ml.loglik, loglik_classes
 
 
-def restore(acq: Acquisition, settings: RestoreSettings, seed: int, ideal: Ideal = Ideal()) -> Restoration:
+def restore(
+    acq: Acquisition, settings: RestoreSettings, seed: int, ideal: Ideal = Ideal()
+) -> Restoration:
     """Deconvolve one acquisition: known PSF for the no-turbulence image (or with ``ideal.psf``), blind EM
     otherwise; checkpointed in ``settings.checkpoint`` (a rerun after an interruption reads it back).
 
@@ -178,11 +207,21 @@ def restore(acq: Acquisition, settings: RestoreSettings, seed: int, ideal: Ideal
         if path.exists():
             with np.load(path, allow_pickle=False) as z:
                 cls = z["classes"] if z["classes"].size else None
-                return Restoration(kind, z["s0"], z["dolp"], cls, z["psf"], z["loglik"], z["loglik_classes"])
+                return Restoration(
+                    kind, z["s0"], z["dolp"], cls, z["psf"], z["loglik"], z["loglik_classes"]
+                )
     s0, dolp, classes, psf, loglik, loglik_classes = _em(acq, settings, known, seed)
     if path is not None:
         from scatterlab.runtime.results import write_npz
 
-        write_npz(path, overwrite=True, s0=s0, dolp=dolp, psf=psf, loglik=loglik, loglik_classes=loglik_classes,
-                  classes=np.zeros(0, int) if classes is None else classes)
+        write_npz(
+            path,
+            overwrite=True,
+            s0=s0,
+            dolp=dolp,
+            psf=psf,
+            loglik=loglik,
+            loglik_classes=loglik_classes,
+            classes=np.zeros(0, int) if classes is None else classes,
+        )
     return Restoration(kind, s0, dolp, classes, psf, loglik, loglik_classes)

@@ -43,7 +43,9 @@ from pathlib import Path
 __all__ = ["SceneConfig", "Plate", "default_scene", "load_scene", "plate_labels"]
 
 ESTIMATES = ("classes", "n_kappa", "posterior")
-MAX_IMAGE_SIZE = 2048  # pixels: the 2x-wide rendering field and the EM grids of one image fit in a few GiB
+MAX_IMAGE_SIZE = (
+    2048  # pixels: the 2x-wide rendering field and the EM grids of one image fit in a few GiB
+)
 
 
 @dataclass
@@ -60,7 +62,9 @@ class Plate:
 
     def validate(self, where: str = "plates") -> "Plate":
         if not isinstance(self.metal, str) or not self.metal.isidentifier():
-            raise ValueError(f"{where}.metal must be a name (letters, digits, _), got {self.metal!r}")
+            raise ValueError(
+                f"{where}.metal must be a name (letters, digits, _), got {self.metal!r}"
+            )
         for name in ("metal_n", "paint_n"):
             v = getattr(self, name)
             if not (math.isfinite(v) and 0 < v <= 100):
@@ -105,7 +109,9 @@ class SceneConfig:
         _check_types(self)
         _check_ranges(self)
         if not self.plates:
-            raise ValueError("plates: at least one [[plates]] entry is needed (an empty list is not allowed)")
+            raise ValueError(
+                "plates: at least one [[plates]] entry is needed (an empty list is not allowed)"
+            )
         names = [p.metal for p in self.plates]
         if len(set(names)) != len(names):
             raise ValueError(f"plates: each plate needs its own metal name, got {names}")
@@ -117,8 +123,13 @@ class SceneConfig:
         return self
 
 
-_LISTS = {"geometry_deg": float, "d_over_r0": float, "polarizer_deg": float, "estimate": str,
-          "plate_center": float}
+_LISTS = {
+    "geometry_deg": float,
+    "d_over_r0": float,
+    "polarizer_deg": float,
+    "estimate": str,
+    "plate_center": float,
+}
 
 
 def _check_types(obj, where: str = "") -> None:
@@ -134,7 +145,9 @@ def _check_types(obj, where: str = "") -> None:
             if not ok:
                 raise ValueError(f"{prefix}{f.name} must be a list of {kind.__name__}s, got {v!r}")
             continue
-        kind = {"int": int, "float": float, "str": str, "int | None": int}.get(str(f.type), type(f.default))
+        kind = {"int": int, "float": float, "str": str, "int | None": int}.get(
+            str(f.type), type(f.default)
+        )
         if not _is(v, kind):
             raise ValueError(f"{prefix}{f.name} must be a {kind.__name__}, got {v!r}")
 
@@ -156,8 +169,10 @@ def _finite(cfg, name, lo, hi, *, lo_open=False):
 
 def _check_ranges(cfg: SceneConfig) -> None:
     if not (16 <= cfg.image_size <= MAX_IMAGE_SIZE and cfg.image_size % 2 == 0):
-        raise ValueError(f"image_size must be an even number of pixels in [16, {MAX_IMAGE_SIZE}] "
-                         f"(memory grows as its square), got {cfg.image_size}")
+        raise ValueError(
+            f"image_size must be an even number of pixels in [16, {MAX_IMAGE_SIZE}] "
+            f"(memory grows as its square), got {cfg.image_size}"
+        )
     if not cfg.geometry_deg or not all(math.isfinite(g) and 0 < g < 89 for g in cfg.geometry_deg):
         raise ValueError(f"geometry_deg must list angles in (0, 89) deg, got {cfg.geometry_deg}")
     if not all(math.isfinite(x) and 0 < x <= 100 for x in cfg.d_over_r0):
@@ -167,15 +182,21 @@ def _check_ranges(cfg: SceneConfig) -> None:
     _finite(cfg, "read_noise", 0, 1e6)
     _finite(cfg, "sigma_known", 1e-3, 1.5)
     _finite(cfg, "plate_zoom", 0.25, 16)
-    if len(cfg.plate_center) != 2 or not all(math.isfinite(c) and 0 <= c <= 16 for c in cfg.plate_center):
-        raise ValueError(f"plate_center must be [row, column] in template units within [0, 16], "
-                         f"got {cfg.plate_center}")
+    if len(cfg.plate_center) != 2 or not all(
+        math.isfinite(c) and 0 <= c <= 16 for c in cfg.plate_center
+    ):
+        raise ValueError(
+            f"plate_center must be [row, column] in template units within [0, 16], "
+            f"got {cfg.plate_center}"
+        )
     import numpy as np
 
     a = np.mod(np.radians(cfg.polarizer_deg), np.pi)
     if len(np.unique(np.round(a, 9))) < 3 or not all(math.isfinite(x) for x in cfg.polarizer_deg):
-        raise ValueError(f"polarizer_deg needs at least three distinct angles (mod 180 deg), "
-                         f"got {cfg.polarizer_deg}")
+        raise ValueError(
+            f"polarizer_deg needs at least three distinct angles (mod 180 deg), "
+            f"got {cfg.polarizer_deg}"
+        )
     if cfg.psf_model not in ("em", "pupil"):
         raise ValueError(f"psf_model must be 'em' or 'pupil', got {cfg.psf_model!r}")
     if not 1 <= cfg.iterations <= 100000:
@@ -185,7 +206,9 @@ def _check_ranges(cfg: SceneConfig) -> None:
     if not 0 <= cfg.seed < 2**63:
         raise ValueError(f"seed must be in [0, 2^63), got {cfg.seed}")
     if cfg.region_margin_px is not None and not 0 <= cfg.region_margin_px <= cfg.image_size // 8:
-        raise ValueError(f"region_margin_px must be in [0, image_size/8], got {cfg.region_margin_px}")
+        raise ValueError(
+            f"region_margin_px must be in [0, image_size/8], got {cfg.region_margin_px}"
+        )
     if cfg.priors not in ("ch5", "ch6", "ch7", "none"):
         raise ValueError(f"priors must be one of ch5, ch6, ch7, none, got {cfg.priors!r}")
     bad = set(cfg.estimate) - set(ESTIMATES)
@@ -204,7 +227,9 @@ def plate_labels(cfg: SceneConfig, rng):
     """The plate's object-coordinate label map ``(image_size, image_size)`` (0 paint, 1 metal, 2 scratch)."""
     from scatterlab.imaging import painted_plate
 
-    return painted_plate(cfg.image_size, zoom=cfg.plate_zoom, center=tuple(cfg.plate_center), rng=rng).labels
+    return painted_plate(
+        cfg.image_size, zoom=cfg.plate_zoom, center=tuple(cfg.plate_center), rng=rng
+    ).labels
 
 
 def load_scene(path) -> SceneConfig:
@@ -234,7 +259,9 @@ def load_scene(path) -> SceneConfig:
         for k, p in enumerate(plates):
             bad = set(p) - pk
             if bad:
-                raise ValueError(f"{path}: unknown key(s) {sorted(bad)} in plates[{k}]; allowed: {sorted(pk)}")
+                raise ValueError(
+                    f"{path}: unknown key(s) {sorted(bad)} in plates[{k}]; allowed: {sorted(pk)}"
+                )
             cfg.plates.append(Plate(**p))
     try:
         return cfg.validate()

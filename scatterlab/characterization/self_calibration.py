@@ -11,7 +11,8 @@ scene as estimated: the classification gives the layout (metal vs dielectric), a
 uncorrected region means gives each region's material, and that synthetic plate is imaged through the same
 PSF (the known one, or the deconvolution's estimate for a corrected image), without noise, restored as the
 data were (with the known PSF, or blindly from a new random start PSF -- a parametric bootstrap of the
-whole blind restoration, PSF error included) and registered like the data. The bias of each region and geometry is the re-simulated region mean
+whole blind restoration, PSF error included) and registered like the data. The bias of each region
+and geometry is the re-simulated region mean
 minus the synthetic truth; it is subtracted from the data, and half of it is kept as a systematic error
 (the re-simulated scene is not the true one). What it does not see (the scene's own details, the random
 start of one blind run) is left to the inferred noise term of the posterior.
@@ -31,7 +32,9 @@ from scatterlab.characterization.scene_config import Plate
 
 __all__ = ["estimated_plate", "restoration_bias", "bias_corrected"]
 
-SYSTEMATIC_FRACTION = 0.5  # of the re-simulated bias, kept as a systematic error after subtracting it
+SYSTEMATIC_FRACTION = (
+    0.5  # of the re-simulated bias, kept as a systematic error after subtracting it
+)
 
 
 def estimated_plate(regions, thetas, sigma) -> Plate:
@@ -53,16 +56,26 @@ def _resimulate_task(task):
     a random start PSF) and register one geometry."""
     plate, labels, theta, psf, blind, cfg, seed = task
     rng = np.random.default_rng(seed)
-    acq = acquire(plate, labels, theta, "resimulation", float("nan") if blind else None, cfg, rng,
-                  Ideal(noise=True), psf=psf)
+    acq = acquire(
+        plate,
+        labels,
+        theta,
+        "resimulation",
+        float("nan") if blind else None,
+        cfg,
+        rng,
+        Ideal(noise=True),
+        psf=psf,
+    )
     settings = RestoreSettings(cfg.iterations, cfg.psf_model, None, True, None)
     rest = restore(acq, settings, seed, Ideal(psf=not blind))
     reg = register_restoration(rest, theta, None, foreshortened=acq.foreshortened)
     return reg.dolp, acq.truth_dolp
 
 
-def restoration_bias(regions, class_map, thetas, psfs, cfg, rng, interior, margin, *, blind=False,
-                     executor=None) -> dict:
+def restoration_bias(
+    regions, class_map, thetas, psfs, cfg, rng, interior, margin, *, blind=False, executor=None
+) -> dict:
     """Re-simulated bias of each region's mean DOLP per geometry.
 
     Parameters
@@ -95,7 +108,10 @@ def restoration_bias(regions, class_map, thetas, psfs, cfg, rng, interior, margi
 
     plate = estimated_plate(regions, thetas, cfg.sigma_known)
     labels = (np.asarray(class_map) > 0).astype(int)
-    tasks = [(plate, labels, th, psf, blind, cfg, int(rng.integers(2**63))) for th, psf in zip(thetas, psfs)]
+    tasks = [
+        (plate, labels, th, psf, blind, cfg, int(rng.integers(2**63)))
+        for th, psf in zip(thetas, psfs)
+    ]
     ex = executor if executor is not None else get_executor("serial")
     out = ex.map(_resimulate_task, tasks, desc="self-calibration")
     stack = np.stack([d for d, _ in out])
@@ -113,4 +129,6 @@ def bias_corrected(region: RegionData, bias) -> RegionData:
     """``region`` with the re-simulated ``bias`` (M,) subtracted and a fraction of it added to its error."""
     b = np.asarray(bias, float)
     sys_err = SYSTEMATIC_FRACTION * np.abs(b)
-    return replace(region, mean=region.mean - b, error=np.sqrt(region.error**2 + sys_err**2), bias=b)
+    return replace(
+        region, mean=region.mean - b, error=np.sqrt(region.error**2 + sys_err**2), bias=b
+    )

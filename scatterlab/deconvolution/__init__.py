@@ -8,11 +8,36 @@
 """
 
 from scatterlab.deconvolution.classify import classification_errors, classify_dolp
-from scatterlab.deconvolution.em import DeconvolutionResult, blind_deconvolve, evenly_spaced, object_grid
+from scatterlab.deconvolution.em import (
+    DeconvolutionResult,
+    blind_deconvolve,
+    evenly_spaced,
+    object_grid,
+)
+from scatterlab.deconvolution.priors import (
+    PRIOR_SETS,
+    SuperGaussianPrior,
+    adaptive_priors,
+    dolp_update,
+    dolp_update_companion,
+    map_objective,
+)
 from scatterlab.deconvolution.psf_update import gerchberg_saxton, initial_psf, resample_psf
-from scatterlab.deconvolution.priors import (PRIOR_SETS, SuperGaussianPrior, adaptive_priors, dolp_update,
-                                             dolp_update_companion, map_objective)
 
-__all__ = ["blind_deconvolve", "DeconvolutionResult", "evenly_spaced", "SuperGaussianPrior", "PRIOR_SETS",
-           "dolp_update", "dolp_update_companion", "adaptive_priors", "map_objective", "classification_errors",
-           "classify_dolp", "initial_psf", "object_grid", "gerchberg_saxton", "resample_psf"]
+__all__ = [
+    "blind_deconvolve",
+    "DeconvolutionResult",
+    "evenly_spaced",
+    "SuperGaussianPrior",
+    "PRIOR_SETS",
+    "dolp_update",
+    "dolp_update_companion",
+    "adaptive_priors",
+    "map_objective",
+    "classification_errors",
+    "classify_dolp",
+    "initial_psf",
+    "object_grid",
+    "gerchberg_saxton",
+    "resample_psf",
+]

@@ -36,14 +36,18 @@ def classification_errors(estimate, truth, *, metal_classes=(1,), mask=None) -> 
     ef, tf = e.astype(float), t.astype(float)
     corr = float(np.corrcoef(ef, tf)[0, 1]) if ef.std() > 0 and tf.std() > 0 else float("nan")
     n_metal, n_diel = int(t.sum()), int((~t).sum())
-    return {"false_metal": float(np.sum(e & ~t) / n), "false_dielectric": float(np.sum(~e & t) / n),
-            # Table 4's columns: wrongly metal per true dielectric pixel, wrongly dielectric per true metal
-            # pixel (its rows imply these class-size normalisations); the total is over all pixels
-            "false_metal_rate": float(np.sum(e & ~t) / n_diel) if n_diel else float("nan"),
-            "false_dielectric_rate": float(np.sum(~e & t) / n_metal) if n_metal else float("nan"),
-            "metal_share": float(n_metal / n),
-            "total_error": float(np.sum(e != t) / n), "correlation": corr,
-            "rmse": float(np.sqrt(np.mean((ef - tf) ** 2)))}
+    return {
+        "false_metal": float(np.sum(e & ~t) / n),
+        "false_dielectric": float(np.sum(~e & t) / n),
+        # Table 4's columns: wrongly metal per true dielectric pixel, wrongly dielectric per true metal
+        # pixel (its rows imply these class-size normalisations); the total is over all pixels
+        "false_metal_rate": float(np.sum(e & ~t) / n_diel) if n_diel else float("nan"),
+        "false_dielectric_rate": float(np.sum(~e & t) / n_metal) if n_metal else float("nan"),
+        "metal_share": float(n_metal / n),
+        "total_error": float(np.sum(e != t) / n),
+        "correlation": corr,
+        "rmse": float(np.sqrt(np.mean((ef - tf) ** 2))),
+    }
 
 
 def classify_dolp(dolp, priors) -> np.ndarray:
@@ -54,5 +58,7 @@ def classify_dolp(dolp, priors) -> np.ndarray:
     if not priors:
         raise ValueError("priors must list at least one SuperGaussianPrior")
     with np.errstate(over="ignore"):
-        logs = np.stack([np.nan_to_num(pr.log_pdf(P), nan=-np.inf, neginf=-np.inf) for pr in priors])
+        logs = np.stack(
+            [np.nan_to_num(pr.log_pdf(P), nan=-np.inf, neginf=-np.inf) for pr in priors]
+        )
     return np.argmax(logs, axis=0)

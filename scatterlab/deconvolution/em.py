@@ -7,10 +7,12 @@ blurred by PSFs :math:`h_n` (one shared, division of amplitude, or one per chann
           = h_n \ast [\tfrac12(1 - \mathcal P)S_0 + \mathcal P S_0\cos^2(\alpha - \theta_n)]
 
 E-step (Eq. 193): with :math:`r_n = d_n / i_n` and the back-projection :math:`c_n = h_n^T \ast r_n`,
-:math:`\sum_y\psi_{un} = \tfrac12(1 - \mathcal P)S_0 c_n` and :math:`\sum_y\psi_{pn} = \mathcal P S_0\cos^2(\alpha - \theta_n)c_n`.
+:math:`\sum_y\psi_{un} = \tfrac12(1 - \mathcal P)S_0 c_n` and
+:math:`\sum_y\psi_{pn} = \mathcal P S_0\cos^2(\alpha - \theta_n)c_n`.
 M-step (Eq. 194), for polarizer angles evenly spaced over 180 deg (Eqs. 159-160 decouple the updates):
 
-* :math:`S_0 \leftarrow \sum_n(\psi_{un} + \psi_{pn}) / \sum_n w_n[\tfrac12(1 - \mathcal P) + \mathcal P\cos^2(\alpha - \theta_n)]`
+* :math:`S_0 \leftarrow \sum_n(\psi_{un} + \psi_{pn}) / \sum_n w_n[\tfrac12(1 - \mathcal P)
+  + \mathcal P\cos^2(\alpha - \theta_n)]`
   (:math:`\frac2K\sum_n(\psi_{un} + \psi_{pn})` for evenly spaced angles and no boundary loss), w_n the share
   of the object pixel's light that falls in the measured window (1 with periodic boundaries);
 * :math:`\mathcal P \leftarrow Q/T` (ML) or the root of Eq. 196 with a super-Gaussian prior
@@ -128,12 +130,30 @@ def _pad_edge(a, pad):
     return np.pad(a, [(0, 0)] * (a.ndim - 2) + [(pad, pad), (pad, pad)], mode="edge") if pad else a
 
 
-def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em", shared_psf: bool = True,
-                     priors: tuple | None = None, prior_weight: float = 1.0, aop=0.0, estimate_aop: bool = False,
-                     iterations: int = 50, tol: float | None = None, psf_radius: float | None = None,
-                     boundary: str = "reeves", pad: int | None = None, gs_steps: int = 5,
-                     update_object: bool = True, s0_start=None, dolp_start=None, mask=None,
-                     saturation: float | None = None) -> DeconvolutionResult:
+def blind_deconvolve(
+    data,
+    angles,
+    *,
+    psf0=None,
+    pupil=None,
+    psf_mode: str = "em",
+    shared_psf: bool = True,
+    priors: tuple | None = None,
+    prior_weight: float = 1.0,
+    aop=0.0,
+    estimate_aop: bool = False,
+    iterations: int = 50,
+    tol: float | None = None,
+    psf_radius: float | None = None,
+    boundary: str = "reeves",
+    pad: int | None = None,
+    gs_steps: int = 5,
+    update_object: bool = True,
+    s0_start=None,
+    dolp_start=None,
+    mask=None,
+    saturation: float | None = None,
+) -> DeconvolutionResult:
     """Blind deconvolution of polarimetric channel images.
 
     Parameters
@@ -175,8 +195,10 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
     if boundary not in ("reeves", "periodic"):
         raise ValueError(f"boundary must be 'reeves' or 'periodic', got {boundary!r}")
     if np.any(np.abs(th) > 2 * np.pi):
-        raise ValueError(f"angles must be polarizer angles in radians, got values up to {np.abs(th).max():g} "
-                         "(degrees? use numpy.radians)")
+        raise ValueError(
+            f"angles must be polarizer angles in radians, got values up to {np.abs(th).max():g} "
+            "(degrees? use numpy.radians)"
+        )
     if not (np.isfinite(prior_weight) and prior_weight >= 0):
         raise ValueError(f"prior_weight must be finite and >= 0, got {prior_weight!r}")
     if psf_radius is not None and not (np.isfinite(psf_radius) and psf_radius >= 1):
@@ -191,8 +213,10 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
         raise ValueError("psf_mode='pupil' needs the pupil (aperture) array")
     notes = []
     if not evenly_spaced(th):
-        notes.append("polarizer angles are not evenly spaced: the S0/DOLP updates are generalised-EM steps "
-                     "(coupled updates of Sec. 3.3.2)")
+        notes.append(
+            "polarizer angles are not evenly spaced: the S0/DOLP updates are generalised-EM steps "
+            "(coupled updates of Sec. 3.3.2)"
+        )
     d = np.clip(d, 0.0, None)
     if not d.sum() > 0:
         raise ValueError("data holds no photons (every count is <= 0): nothing to deconvolve")
@@ -200,7 +224,9 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
     if mask is not None:
         m = np.asarray(mask)
         if m.shape != d.shape[1:] or m.dtype != bool:
-            raise ValueError(f"mask must be a boolean array of shape {d.shape[1:]}, got {m.dtype} {m.shape}")
+            raise ValueError(
+                f"mask must be a boolean array of shape {d.shape[1:]}, got {m.dtype} {m.shape}"
+            )
         valid &= m
     if saturation is not None:
         if not saturation > 0:
@@ -209,7 +235,9 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
     if not valid.any():
         raise ValueError("mask and saturation leave no pixel to use")
     if not valid.all():
-        notes.append(f"{int((~valid).sum())} masked pixels (saturated or excluded) left out of the likelihood")
+        notes.append(
+            f"{int((~valid).sum())} masked pixels (saturated or excluded) left out of the likelihood"
+        )
         d = d * valid
     H, W = d.shape[1:]
     if psf_radius is None:
@@ -225,7 +253,11 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
     nps = 1 if shared_psf else K
     if psf0 is not None:
         h = np.asarray(psf0, float)
-        h = np.broadcast_to(h if h.ndim == 3 else h[None], (nps, Hp, Wp)).copy() if h.shape[-2:] == (Hp, Wp) else None
+        h = (
+            np.broadcast_to(h if h.ndim == 3 else h[None], (nps, Hp, Wp)).copy()
+            if h.shape[-2:] == (Hp, Wp)
+            else None
+        )
         if h is None:
             raise ValueError(f"psf0 must be given on the object grid {(Hp, Wp)} (data + 2 pad)")
     elif pupil is not None:
@@ -290,7 +322,12 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
                 # the priors classify the measured pixels; the Reeves border (never observed) keeps the ML update
                 Tw, Qw = ops.crop(T), ops.crop(Qp)
                 cands = np.stack([dolp_update(Tw, Qw, pr, prior_weight) for pr in priors])
-                objs = np.stack([map_objective(cands[k], Tw, Qw, pr, prior_weight) for k, pr in enumerate(priors)])
+                objs = np.stack(
+                    [
+                        map_objective(cands[k], Tw, Qw, pr, prior_weight)
+                        for k, pr in enumerate(priors)
+                    ]
+                )
                 classes = np.argmax(objs, axis=0)
                 P_new[ops.win] = np.take_along_axis(cands, classes[None], 0)[0]
             if estimate_aop:
@@ -307,7 +344,9 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
             h_em = np.where(support, np.clip(h_em, 0, None), 0.0)
             h_em /= np.maximum(h_em.sum(axis=(-2, -1), keepdims=True), 1e-300)
             if psf_mode == "pupil":
-                h_new, pupil_phase_new = gerchberg_saxton(h_em, pupil, pupil_phase, (Hp, Wp), gs_steps)
+                h_new, pupil_phase_new = gerchberg_saxton(
+                    h_em, pupil, pupil_phase, (Hp, Wp), gs_steps
+                )
                 h_new = np.where(support, h_new, 0.0)
                 h_new /= h_new.sum(axis=(-2, -1), keepdims=True)
             else:
@@ -329,17 +368,32 @@ def blind_deconvolve(data, angles, *, psf0=None, pupil=None, psf_mode: str = "em
         loglik.append(L_new)
         obj = L_new
         if priors:
-            obj += float(np.sum([np.sum(np.where(classes == k, prior_weight * pr.log_pdf(ops.crop(P)), 0.0))
-                                 for k, pr in enumerate(priors)]))
+            obj += float(
+                np.sum(
+                    [
+                        np.sum(np.where(classes == k, prior_weight * pr.log_pdf(ops.crop(P)), 0.0))
+                        for k, pr in enumerate(priors)
+                    ]
+                )
+            )
         objective.append(obj)
         if tol is not None and abs(loglik[-1] - loglik[-2]) <= tol * abs(loglik[-2]):
             break
     alpha = model.alpha
     aop_out = ops.crop(alpha) if np.ndim(alpha) else np.full((H, W), float(alpha))
-    return DeconvolutionResult(s0=ops.crop(s0), dolp=np.clip(ops.crop(P), 0, 1), aop=aop_out, psfs=h,
-                               classes=classes, priors=priors, loglik=np.array(loglik),
-                               objective=np.array(objective), iterations=it, notes=notes,
-                               seconds=time.perf_counter() - t0)
+    return DeconvolutionResult(
+        s0=ops.crop(s0),
+        dolp=np.clip(ops.crop(P), 0, 1),
+        aop=aop_out,
+        psfs=h,
+        classes=classes,
+        priors=priors,
+        loglik=np.array(loglik),
+        objective=np.array(objective),
+        iterations=it,
+        notes=notes,
+        seconds=time.perf_counter() - t0,
+    )
 
 
 @dataclass
@@ -360,7 +414,9 @@ class _StokesBasis:
         c2a, s2a = np.cos(2 * alpha), np.sin(2 * alpha)
         self.J = 3 if np.any(np.abs(s2a) > 1e-12) else 2
         self.trig = np.stack([c2a, s2a])[: self.J - 1]  # (J - 1, Hp, Wp)
-        self.A = 0.5 * np.stack([np.ones_like(th), np.cos(2 * th), np.sin(2 * th)], axis=1)[:, : self.J]  # (K, J)
+        self.A = (
+            0.5 * np.stack([np.ones_like(th), np.cos(2 * th), np.sin(2 * th)], axis=1)[:, : self.J]
+        )  # (K, J)
         self.sum_trig = (2 * self.A[:, 1:]).sum(0)  # sum_n (cos 2theta_n, sin 2theta_n)
 
     def forward(self, h, s0, P, Hf=None):
@@ -371,7 +427,9 @@ class _StokesBasis:
         return _State(np.tensordot(self.A, blurred, axes=1), Hf, Bf)
 
     def estep(self, state, r, s0, P):
-        R = self.ops.rfft(self.ops.extend(np.tensordot(2 * self.A.T, r, axes=1)))  # spectra of combined ratios
+        R = self.ops.rfft(
+            self.ops.extend(np.tensordot(2 * self.A.T, r, axes=1))
+        )  # spectra of combined ratios
         C = self.ops.irfft(R * np.conj(state.Hf))  # their back-projections (J, Hp, Wp)
         pol = C[0] + np.sum(self.trig * C[1:], axis=0)  # sum_n 2 cos^2(alpha - theta_n) c_n
         T = 0.5 * s0 * ((1 - P) * C[0] + P * pol)

@@ -25,8 +25,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SuperGaussianPrior", "PRIOR_SETS", "dolp_update", "dolp_update_companion", "adaptive_priors",
-           "map_objective"]
+__all__ = [
+    "SuperGaussianPrior",
+    "PRIOR_SETS",
+    "dolp_update",
+    "dolp_update_companion",
+    "adaptive_priors",
+    "map_objective",
+]
 
 
 @dataclass(frozen=True)
@@ -59,10 +65,19 @@ class SuperGaussianPrior:
 
 
 PRIOR_SETS = {
-    "ch5": (SuperGaussianPrior(3.1, 0.65, name="dielectric"), SuperGaussianPrior(7.2, 0.15, name="metal")),
-    "ch6": (SuperGaussianPrior(3.4, 0.65, name="dielectric"), SuperGaussianPrior(35.0, 0.035, name="aluminium"),
-            SuperGaussianPrior(10.5, 0.185, name="iron")),
-    "ch7": (SuperGaussianPrior(4.0, 0.7, name="dielectric"), SuperGaussianPrior(7.0, 0.15, name="metal")),
+    "ch5": (
+        SuperGaussianPrior(3.1, 0.65, name="dielectric"),
+        SuperGaussianPrior(7.2, 0.15, name="metal"),
+    ),
+    "ch6": (
+        SuperGaussianPrior(3.4, 0.65, name="dielectric"),
+        SuperGaussianPrior(35.0, 0.035, name="aluminium"),
+        SuperGaussianPrior(10.5, 0.185, name="iron"),
+    ),
+    "ch7": (
+        SuperGaussianPrior(4.0, 0.7, name="dielectric"),
+        SuperGaussianPrior(7.0, 0.15, name="metal"),
+    ),
 }
 
 
@@ -120,7 +135,9 @@ def dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1
     t = np.linspace(0.0, 1.0, 9)[:, None]
     xs = lo_b + (hi_b - lo_b) * t  # (17, pixels)
     fg = _f_scaled(xs, qf, a, c3, m)
-    ends = np.flatnonzero((fg[0] == 0) | (hi_b == lo_b))  # q = 0 (or q = c3): the end point itself is a root
+    ends = np.flatnonzero(
+        (fg[0] == 0) | (hi_b == lo_b)
+    )  # q = 0 (or q = c3): the end point itself is a root
     # at q = 0 f leaves the root P = 0 with the sign of f'(0) = a c3^(m-1) - 1: bracket from there
     fg[0] = np.where(fg[0] == 0, a * c3 ** (m - 1) - 1, fg[0])
     neg = np.signbit(fg)
@@ -134,11 +151,15 @@ def dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1
     multi = ~single
     if np.any(multi):
         im, Pm = idx[multi], P[multi]
-        obj = map_objective(Pm, 1.0, qf[im], prior, np.minimum(weight / np.maximum(Ts.ravel()[im], 1e-200), 1e200))
+        obj = map_objective(
+            Pm, 1.0, qf[im], prior, np.minimum(weight / np.maximum(Ts.ravel()[im], 1e-200), 1e200)
+        )
         order = np.lexsort((obj, im))  # per pixel, the root of largest objective comes last
         last = np.r_[im[order][1:] != im[order][:-1], True]
         out[im[order][last]] = Pm[order][last]
-    out = np.where(np.isnan(out), qf, out).reshape(q.shape)  # no bracket: cannot happen (f(min) >= 0 >= f(max))
+    out = np.where(np.isnan(out), qf, out).reshape(
+        q.shape
+    )  # no bracket: cannot happen (f(min) >= 0 >= f(max))
     return np.where(empty, c3, out)
 
 
@@ -185,7 +206,9 @@ def dolp_update_companion(T, Q, prior: SuperGaussianPrior, weight: float = 1.0) 
     poly = Pn.polymul(Pn.polymul([0, 1], [-1, 1]), Pn.polypow([-c3, 1], m - 1)) * a
     poly = Pn.polyadd(poly, [Q / T, -1])
     roots = Pn.polyroots(poly)
-    real = roots[(np.abs(roots.imag) < 1e-9) & (roots.real >= -1e-12) & (roots.real <= 1 + 1e-12)].real
+    real = roots[
+        (np.abs(roots.imag) < 1e-9) & (roots.real >= -1e-12) & (roots.real <= 1 + 1e-12)
+    ].real
     real = np.clip(real, 0, 1)
     obj = map_objective(real, 1.0, Q / T, prior, weight / T)
     return float(real[np.argmax(obj)])
@@ -201,12 +224,21 @@ def adaptive_priors(dolp, base=PRIOR_SETS["ch5"], *, m: int = 10, mask=None):
     v = v[np.isfinite(v) & (mask if mask is not None else True)].ravel()
     if v.size < 10:
         raise ValueError("adaptive_priors needs at least 10 finite DOLP values")
-    cent, lab = kmeans2(v[:, None], np.array([[np.quantile(v, 0.2)], [np.quantile(v, 0.8)]]), minit="matrix", seed=0)
+    cent, lab = kmeans2(
+        v[:, None], np.array([[np.quantile(v, 0.2)], [np.quantile(v, 0.8)]]), minit="matrix", seed=0
+    )
     out = []
     order = np.argsort(-cent[:, 0])  # dielectric first (higher DOLP), as in the base sets
     names = [p.name for p in base]
-    for rank, k in enumerate(order[:len(base)]):
+    for rank, k in enumerate(order[: len(base)]):
         sel = v[lab == k]
         sd = max(float(sel.std()) if sel.size > 1 else 0.05, 0.01)
-        out.append(SuperGaussianPrior(1 / (2 * sd), float(cent[k, 0]), m, name=names[rank] if rank < len(names) else f"class{rank}"))
+        out.append(
+            SuperGaussianPrior(
+                1 / (2 * sd),
+                float(cent[k, 0]),
+                m,
+                name=names[rank] if rank < len(names) else f"class{rank}",
+            )
+        )
     return tuple(out)

@@ -29,7 +29,9 @@ def initial_psf(pupil, shape, d_over_r0: float = 10.0, rng=None) -> np.ndarray:
         raise ValueError(f"d_over_r0 must be > 0, got {d_over_r0}")
     n = A.shape[0]
     diameter = 2 * np.sqrt((A > 0).sum() / np.pi)  # pupil diameter [grid samples]
-    phase = remove_piston_tilt(phase_screen(n, 1.0, diameter / d_over_r0, np.random.default_rng(rng)), A > 0)
+    phase = remove_piston_tilt(
+        phase_screen(n, 1.0, diameter / d_over_r0, np.random.default_rng(rng)), A > 0
+    )
     return resample_psf(psf(A, phase, pad=2), shape)
 
 
@@ -39,8 +41,9 @@ def resample_psf(h, shape) -> np.ndarray:
     Hs, Ws = h.shape
     H, W = shape
     ch, cw = min(H, Hs), min(W, Ws)
-    out[(H - ch) // 2:(H - ch) // 2 + ch, (W - cw) // 2:(W - cw) // 2 + cw] = \
-        h[(Hs - ch) // 2:(Hs - ch) // 2 + ch, (Ws - cw) // 2:(Ws - cw) // 2 + cw]
+    out[(H - ch) // 2 : (H - ch) // 2 + ch, (W - cw) // 2 : (W - cw) // 2 + cw] = h[
+        (Hs - ch) // 2 : (Hs - ch) // 2 + ch, (Ws - cw) // 2 : (Ws - cw) // 2 + cw
+    ]
     return out / out.sum()
 
 
@@ -74,4 +77,3 @@ def gerchberg_saxton(h_target, pupil, phase, shape, steps):
         out_h.append(resample_psf(np.abs(F) ** 2, shape))
         out_phase.append(ph)
     return np.stack(out_h), np.stack(out_phase)
-

@@ -19,8 +19,16 @@ import numpy as np
 
 from scatterlab._checks import as_finite
 
-__all__ = ["analyzer_matrix", "convolve", "channel_images", "detect", "stokes_from_channels",
-           "dolp_aop_from_stokes", "ANGLES_0_45_90_135", "ANGLES_0_60_120"]
+__all__ = [
+    "analyzer_matrix",
+    "convolve",
+    "channel_images",
+    "detect",
+    "stokes_from_channels",
+    "dolp_aop_from_stokes",
+    "ANGLES_0_45_90_135",
+    "ANGLES_0_60_120",
+]
 
 ANGLES_0_45_90_135 = np.radians([0.0, 45.0, 90.0, 135.0])
 ANGLES_0_60_120 = np.radians([0.0, 60.0, 120.0])
@@ -31,7 +39,9 @@ def analyzer_matrix(angles) -> np.ndarray:
     a = as_finite(angles, "angles").ravel()
     P = 0.5 * np.stack([np.ones_like(a), np.cos(2 * a), np.sin(2 * a)], axis=1)
     if np.linalg.matrix_rank(P) < 3:
-        raise ValueError("angles must include at least three distinct polarizer orientations (mod 180 deg)")
+        raise ValueError(
+            "angles must include at least three distinct polarizer orientations (mod 180 deg)"
+        )
     return P
 
 
@@ -40,7 +50,9 @@ def convolve(images, psfs) -> np.ndarray:
     images = np.asarray(images, float)
     psfs = np.asarray(psfs, float)
     if psfs.shape[-2:] != images.shape[-2:]:
-        raise ValueError(f"psf shape {psfs.shape[-2:]} must equal the image shape {images.shape[-2:]}")
+        raise ValueError(
+            f"psf shape {psfs.shape[-2:]} must equal the image shape {images.shape[-2:]}"
+        )
     H = np.fft.rfft2(np.fft.ifftshift(psfs, axes=(-2, -1)))
     return np.fft.irfft2(np.fft.rfft2(images) * H, s=images.shape[-2:])
 
@@ -64,8 +76,15 @@ def channel_images(stokes, angles, psfs=None) -> np.ndarray:
     return convolve(I, psfs)
 
 
-def detect(channels, rng=None, *, photons: float, read_noise: float = 0.0, dark_current: float = 0.0,
-           scale: float | None = None) -> np.ndarray:
+def detect(
+    channels,
+    rng=None,
+    *,
+    photons: float,
+    read_noise: float = 0.0,
+    dark_current: float = 0.0,
+    scale: float | None = None,
+) -> np.ndarray:
     """Noisy, dark-subtracted detector images in photo-electrons.
 
     Parameters
@@ -86,17 +105,26 @@ def detect(channels, rng=None, *, photons: float, read_noise: float = 0.0, dark_
     I = as_finite(channels, "channels")
     if np.any(I < 0):
         raise ValueError("channels must be non-negative intensities")
-    for name, v, lo in (("photons", photons, "> 0"), ("read_noise", read_noise, ">= 0"),
-                        ("dark_current", dark_current, ">= 0")):
+    for name, v, lo in (
+        ("photons", photons, "> 0"),
+        ("read_noise", read_noise, ">= 0"),
+        ("dark_current", dark_current, ">= 0"),
+    ):
         if not (np.isfinite(v) and (v > 0 if lo == "> 0" else v >= 0)):
             raise ValueError(f"{name} must be finite and {lo} [e-], got {v!r}")
     if scale is not None and not (np.isfinite(scale) and scale > 0):
-        raise ValueError(f"scale (the intensity that gives `photons`) must be finite and > 0, got {scale!r}")
+        raise ValueError(
+            f"scale (the intensity that gives `photons`) must be finite and > 0, got {scale!r}"
+        )
     rng = np.random.default_rng(rng)
     scale = float(I.max()) if scale is None else float(scale)
     expected = photons * I / scale if scale > 0 else np.zeros_like(I)
-    frame = rng.poisson(expected + dark_current).astype(float) + read_noise * rng.standard_normal(I.shape)
-    dark = rng.poisson(np.full(I.shape, dark_current)).astype(float) + read_noise * rng.standard_normal(I.shape)
+    frame = rng.poisson(expected + dark_current).astype(float) + read_noise * rng.standard_normal(
+        I.shape
+    )
+    dark = rng.poisson(np.full(I.shape, dark_current)).astype(
+        float
+    ) + read_noise * rng.standard_normal(I.shape)
     return frame - dark
 
 

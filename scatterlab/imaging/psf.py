@@ -19,8 +19,18 @@ from scipy import optimize, special
 
 from scatterlab._checks import as_finite, as_positive
 
-__all__ = ["circular_pupil", "psf", "otf", "mtf", "radial_profile", "airy_pattern", "diffraction_mtf",
-           "long_exposure_mtf", "short_exposure_mtf", "fit_r0"]
+__all__ = [
+    "circular_pupil",
+    "psf",
+    "otf",
+    "mtf",
+    "radial_profile",
+    "airy_pattern",
+    "diffraction_mtf",
+    "long_exposure_mtf",
+    "short_exposure_mtf",
+    "fit_r0",
+]
 
 
 def circular_pupil(n: int, radius: float, obscuration: float = 0.0) -> np.ndarray:
@@ -55,8 +65,12 @@ def psf(pupil, phase=None, pad: int = 2) -> np.ndarray:
     if pad < 2:
         raise ValueError("pad must be >= 2 for a Nyquist-sampled PSF")
     if not np.all(np.any(pupil != 0, axis=(-2, -1))):
-        raise ValueError("pupil must transmit light (it is zero everywhere): the PSF would be undefined")
-    field = pupil.astype(complex) if phase is None else pupil * np.exp(1j * as_finite(phase, "phase"))
+        raise ValueError(
+            "pupil must transmit light (it is zero everywhere): the PSF would be undefined"
+        )
+    field = (
+        pupil.astype(complex) if phase is None else pupil * np.exp(1j * as_finite(phase, "phase"))
+    )
     n = pupil.shape[-1]
     m = pad * n
     F = np.fft.fft2(field, s=(m, m))
@@ -84,7 +98,9 @@ def radial_profile(image, nbins=None) -> tuple[np.ndarray, np.ndarray]:
     y, x = np.indices(image.shape[-2:]) - n // 2
     r = np.rint(np.hypot(x, y)).astype(int)
     nb = nbins or n // 2
-    sums = np.bincount(r.ravel(), weights=image.reshape(-1) if image.ndim == 2 else image.ravel(), minlength=nb)
+    sums = np.bincount(
+        r.ravel(), weights=image.reshape(-1) if image.ndim == 2 else image.ravel(), minlength=nb
+    )
     counts = np.bincount(r.ravel(), minlength=nb)
     return np.arange(nb), sums[:nb] / np.maximum(counts[:nb], 1)
 
@@ -113,7 +129,9 @@ def short_exposure_mtf(nu, d_over_r0, alpha: float = 1.0) -> np.ndarray:
     """Fried's short-exposure (tilt-removed) MTF; ``alpha = 1`` near field, 0.5 far field."""
     d_over_r0 = float(as_positive(d_over_r0, "d_over_r0"))
     nu = np.clip(np.asarray(nu, float), 0, 1)
-    return diffraction_mtf(nu) * np.exp(-3.44 * (nu * d_over_r0) ** (5 / 3) * (1 - alpha * nu ** (1 / 3)))
+    return diffraction_mtf(nu) * np.exp(
+        -3.44 * (nu * d_over_r0) ** (5 / 3) * (1 - alpha * nu ** (1 / 3))
+    )
 
 
 def fit_r0(nu, measured_mtf, diameter, *, floor: float = 0.02) -> float:
@@ -132,7 +150,9 @@ def fit_r0(nu, measured_mtf, diameter, *, floor: float = 0.02) -> float:
     stop = nu[below[0]] if below.size else 1.0
     sel = (m > floor) & (nu > 0) & (nu < min(stop, 1.0))
     if sel.sum() < 3:
-        raise ValueError("measured_mtf must exceed the floor at three or more frequencies in (0, 1)")
+        raise ValueError(
+            "measured_mtf must exceed the floor at three or more frequencies in (0, 1)"
+        )
 
     def resid(p):
         return np.log(long_exposure_mtf(nu[sel], np.exp(p[0]))) - np.log(m[sel])

@@ -42,15 +42,29 @@ class Scene:
 
 # the letter template: rectangles (row0, row1, col0, col1) in units of 1/16 of the plate's width
 _LETTERS = (
-    (3, 4.2, 2, 7), (7, 8.2, 2, 7), (11, 12.2, 2, 7),  # "s": three horizontal strokes
-    (3, 8, 2, 3.2), (7, 12, 5.8, 7),  # ... and its two vertical joints
-    (2, 12.2, 10.5, 11.7), (5, 6.2, 8.5, 13.7),  # "t": the vertical stroke and the cross bar
+    (3, 4.2, 2, 7),
+    (7, 8.2, 2, 7),
+    (11, 12.2, 2, 7),  # "s": three horizontal strokes
+    (3, 8, 2, 3.2),
+    (7, 12, 5.8, 7),  # ... and its two vertical joints
+    (2, 12.2, 10.5, 11.7),
+    (5, 6.2, 8.5, 13.7),  # "t": the vertical stroke and the cross bar
 )
 
 
-def painted_plate(n: int = 256, *, metal: complex = 1.44 - 16j, paint: complex = 1.39 - 0.34j,
-                  metal_roughness: float = 0.15, paint_roughness: float = 0.3, theta: float = np.radians(50),
-                  scratches: int = 3, zoom: float = 1.0, center=(8.0, 8.0), rng=None) -> Scene:
+def painted_plate(
+    n: int = 256,
+    *,
+    metal: complex = 1.44 - 16j,
+    paint: complex = 1.39 - 0.34j,
+    metal_roughness: float = 0.15,
+    paint_roughness: float = 0.3,
+    theta: float = np.radians(50),
+    scratches: int = 3,
+    zoom: float = 1.0,
+    center=(8.0, 8.0),
+    rng=None,
+) -> Scene:
     """A painted metal plate with bare-metal letter strokes ("s" and "t" as block strokes) and scratches, seen
     at theta_i = theta_r (the scenes of Figs. 47, 49-61). Defaults: aluminium and green paint at 1550 nm.
 
@@ -98,11 +112,20 @@ def painted_plate(n: int = 256, *, metal: complex = 1.44 - 16j, paint: complex =
         d = np.abs((xx - c[0]) * np.sin(a) - (yy - c[1]) * np.cos(a))
         along = np.abs((xx - c[0]) * np.cos(a) + (yy - c[1]) * np.sin(a))
         lab[(d < 0.6) & (along < 0.3 * n)] = 2
-    return Scene(lab, [paint, metal, metal], [paint_roughness, metal_roughness, metal_roughness / 3],
-                 theta, theta, np.pi, names=["paint", "metal", "scratch"])
+    return Scene(
+        lab,
+        [paint, metal, metal],
+        [paint_roughness, metal_roughness, metal_roughness / 3],
+        theta,
+        theta,
+        np.pi,
+        names=["paint", "metal", "scratch"],
+    )
 
 
-def render_stokes(scene: Scene, *, shadowing: str = "torrance-sparrow", diffuse: str = "hyde") -> np.ndarray:
+def render_stokes(
+    scene: Scene, *, shadowing: str = "torrance-sparrow", diffuse: str = "hyde"
+) -> np.ndarray:
     """Linear Stokes images ``(3, H, W)`` [1/sr per unit incident irradiance] of ``scene`` (unpolarized light).
 
     In the specular plane (``phi == pi``) uses the closed form (S2 = 0); otherwise the first column of the

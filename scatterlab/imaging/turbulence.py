@@ -32,9 +32,22 @@ from scipy import integrate, special
 
 from scatterlab._checks import as_positive
 
-__all__ = ["STRUCTURE_CONSTANT", "PSD_CONSTANT", "kolmogorov_psd", "von_karman_psd", "phase_psd", "fried_parameter", "rytov_variance",
-           "rytov_variance_from_r0", "phase_screen", "SlidingScreen", "remove_piston_tilt",
-           "structure_function", "structure_function_theory", "phase_variance_theory"]
+__all__ = [
+    "STRUCTURE_CONSTANT",
+    "PSD_CONSTANT",
+    "kolmogorov_psd",
+    "von_karman_psd",
+    "phase_psd",
+    "fried_parameter",
+    "rytov_variance",
+    "rytov_variance_from_r0",
+    "phase_screen",
+    "SlidingScreen",
+    "remove_piston_tilt",
+    "structure_function",
+    "structure_function_theory",
+    "phase_variance_theory",
+]
 
 
 def kolmogorov_psd(kappa, cn2):
@@ -49,15 +62,19 @@ def von_karman_psd(kappa, cn2, L0=np.inf, l0=0.0):
     k0 = 0.0 if np.isinf(L0) else 2 * np.pi / float(as_positive(L0, "L0"))
     km = np.inf if l0 == 0 else 5.92 / float(as_positive(l0, "l0"))
     with np.errstate(divide="ignore"):
-        return 0.033 * cn2 * np.exp(-(kappa / km) ** 2) * (kappa**2 + k0**2) ** (-11 / 6)
+        return 0.033 * cn2 * np.exp(-((kappa / km) ** 2)) * (kappa**2 + k0**2) ** (-11 / 6)
 
 
 # 2 [(24/5) Gamma(6/5)]^(5/6) = 6.8839: the Kolmogorov structure-function constant
 STRUCTURE_CONSTANT = 2 * (24 / 5 * special.gamma(6 / 5)) ** (5 / 6)
 # the phase-spectrum constant that reproduces it exactly (0.02290, the 0.0229 of Eq. 79), from
 # D(r) = 4 pi A r0^(-5/3) (2 pi r)^(5/3) int u^(-8/3) (1 - J0(u)) du, int = -Gamma(-5/6) / (2^(8/3) Gamma(11/6))
-PSD_CONSTANT = STRUCTURE_CONSTANT / (4 * np.pi * (2 * np.pi) ** (5 / 3)
-                                     * (-special.gamma(-5 / 6) / (2 ** (8 / 3) * special.gamma(11 / 6))))
+PSD_CONSTANT = STRUCTURE_CONSTANT / (
+    4
+    * np.pi
+    * (2 * np.pi) ** (5 / 3)
+    * (-special.gamma(-5 / 6) / (2 ** (8 / 3) * special.gamma(11 / 6)))
+)
 
 
 def phase_psd(f, r0, L0=np.inf, l0=0.0):
@@ -69,7 +86,12 @@ def phase_psd(f, r0, L0=np.inf, l0=0.0):
     f0 = 0.0 if np.isinf(L0) else 1.0 / L0
     fm = np.inf if l0 == 0 else 5.92 / (2 * np.pi * l0)
     with np.errstate(divide="ignore"):
-        return PSD_CONSTANT * r0 ** (-5 / 3) * np.exp(-(f / fm) ** 2) * (f * f + f0 * f0) ** (-11 / 6)
+        return (
+            PSD_CONSTANT
+            * r0 ** (-5 / 3)
+            * np.exp(-((f / fm) ** 2))
+            * (f * f + f0 * f0) ** (-11 / 6)
+        )
 
 
 def fried_parameter(cn2, path_length, wavelength):
@@ -93,8 +115,12 @@ def fried_parameter(cn2, path_length, wavelength):
 
 def _weak_check(s2):
     if s2 >= 0.2:
-        warnings.warn(f"Rytov variance {s2:.3g} >= 0.2: turbulence is not weak and the phase-screen model "
-                      "(Eqs. 82-83) neglects scintillation", RuntimeWarning, stacklevel=3)
+        warnings.warn(
+            f"Rytov variance {s2:.3g} >= 0.2: turbulence is not weak and the phase-screen model "
+            "(Eqs. 82-83) neglects scintillation",
+            RuntimeWarning,
+            stacklevel=3,
+        )
     return s2
 
 
@@ -130,8 +156,10 @@ def _check_screen_args(n, dx, r0, L0, l0):
     if not (np.isfinite(l0) and l0 >= 0):
         raise ValueError(f"l0 (inner scale) must be a finite length >= 0, got {l0!r}")
     if n * dx / r0 > MAX_D_OVER_R0:
-        raise ValueError(f"r0 = {r0:g} m is too small for a screen {n * dx:g} m wide: D/r0 = {n * dx / r0:.3g} "
-                         f"must be <= {MAX_D_OVER_R0:g} (the phase is then not sampled by any grid)")
+        raise ValueError(
+            f"r0 = {r0:g} m is too small for a screen {n * dx:g} m wide: D/r0 = {n * dx / r0:.3g} "
+            f"must be <= {MAX_D_OVER_R0:g} (the phase is then not sampled by any grid)"
+        )
     return dx, r0
 
 
@@ -139,6 +167,7 @@ def _cell_variance(x0, x1, y0, y1, fcx, fcy, L0, l0):
     """Variance of the mode at (fcx, fcy) standing for the frequency cell [x0, x1] x [y0, y1] (r0 = 1):
     int_cell Phi |f|^2 d^2f / |fc|^2, which makes the cell's contribution to the structure function exact
     at small separations (point sampling the singular spectrum underestimates it)."""
+
     def g(y, x):
         f2 = x * x + y * y
         return phase_psd(np.sqrt(f2), 1.0, L0, l0) * f2 if f2 > 0 else 0.0
@@ -158,8 +187,15 @@ def _low_frequency_modes(ny, nx, dx, L0, l0, levels):
             if i == 0 and j == 0:
                 continue
             fcx, fcy = i * dfx, j * dfy
-            grid.append((i, j, _cell_variance(fcx - dfx / 2, fcx + dfx / 2, fcy - dfy / 2, fcy + dfy / 2,
-                                              fcx, fcy, L0, l0)))
+            grid.append(
+                (
+                    i,
+                    j,
+                    _cell_variance(
+                        fcx - dfx / 2, fcx + dfx / 2, fcy - dfy / 2, fcy + dfy / 2, fcx, fcy, L0, l0
+                    ),
+                )
+            )
     modes = []
     if levels:
         for p in range(1, levels + 1):
@@ -169,8 +205,22 @@ def _low_frequency_modes(ny, nx, dx, L0, l0, levels):
                     if i == 0 and j == 0:
                         continue
                     fcx, fcy = i * hx, j * hy
-                    modes.append((fcx, fcy, _cell_variance(fcx - hx / 2, fcx + hx / 2, fcy - hy / 2, fcy + hy / 2,
-                                                           fcx, fcy, L0, l0)))
+                    modes.append(
+                        (
+                            fcx,
+                            fcy,
+                            _cell_variance(
+                                fcx - hx / 2,
+                                fcx + hx / 2,
+                                fcy - hy / 2,
+                                fcy + hy / 2,
+                                fcx,
+                                fcy,
+                                L0,
+                                l0,
+                            ),
+                        )
+                    )
         hx, hy = dfx / 3**levels, dfy / 3**levels
         for sx in (-1, 1):
             for sy in (-1, 1):
@@ -200,7 +250,9 @@ def _fft_field(shape, dx, r0, L0, l0, rng, levels):
         x = (np.arange(nx) - nx / 2) * dx
         y = (np.arange(ny) - ny / 2) * dx
         m = np.array(modes)
-        c = (rng.standard_normal(len(m)) + 1j * rng.standard_normal(len(m))) * np.sqrt(m[:, 2] * scale)
+        c = (rng.standard_normal(len(m)) + 1j * rng.standard_normal(len(m))) * np.sqrt(
+            m[:, 2] * scale
+        )
         ex = np.exp(2j * np.pi * m[:, 0, None] * x[None, :])
         ey = np.exp(2j * np.pi * m[:, 1, None] * y[None, :])
         low = np.einsum("k,ky,kx->yx", c, ey, ex).real
@@ -238,7 +290,9 @@ def phase_screen(n, dx, r0, rng=None, L0=np.inf, subharmonics=True, l0=0.0):
     """
     dx, r0 = _check_screen_args(n, dx, r0, L0, l0)
     rng = np.random.default_rng(rng)
-    return _fft_field((n, n), dx, r0, float(L0), float(l0), rng, SUBHARMONIC_LEVELS if subharmonics else 0)
+    return _fft_field(
+        (n, n), dx, r0, float(L0), float(l0), rng, SUBHARMONIC_LEVELS if subharmonics else 0
+    )
 
 
 class SlidingScreen:
@@ -261,8 +315,15 @@ class SlidingScreen:
             raise ValueError("length must be >= n")
         rng = np.random.default_rng(rng)
         self.n, self.dx = n, dx
-        self.strip = _fft_field((n, length), dx, r0, float(L0), float(l0), rng,
-                                SUBHARMONIC_LEVELS if subharmonics else 0)
+        self.strip = _fft_field(
+            (n, length),
+            dx,
+            r0,
+            float(L0),
+            float(l0),
+            rng,
+            SUBHARMONIC_LEVELS if subharmonics else 0,
+        )
 
     def window(self, shift) -> np.ndarray:
         """The (n, n) window starting ``shift`` pixels (float: Fourier-interpolated) along the strip."""
@@ -271,7 +332,9 @@ class SlidingScreen:
             idx = (int(shift) + np.arange(self.n)) % length
             return self.strip[:, idx]
         f = np.fft.fftfreq(length)
-        shifted = np.fft.ifft(np.fft.fft(self.strip, axis=1) * np.exp(2j * np.pi * f * shift), axis=1).real
+        shifted = np.fft.ifft(
+            np.fft.fft(self.strip, axis=1) * np.exp(2j * np.pi * f * shift), axis=1
+        ).real
         return shifted[:, : self.n]
 
     def frames(self, count: int, step: float = 1.0) -> np.ndarray:
@@ -287,7 +350,7 @@ def remove_piston_tilt(phase, mask=None) -> np.ndarray:
     m = np.ones((ny, nx), bool) if mask is None else np.asarray(mask, bool)
     G = np.stack([np.ones(m.sum()), x[m], y[m]], 1)
     coef, *_ = np.linalg.lstsq(G, phase[..., m].reshape(-1, m.sum()).T, rcond=None)
-    plane = (coef[0][:, None, None] + coef[1][:, None, None] * x + coef[2][:, None, None] * y)
+    plane = coef[0][:, None, None] + coef[1][:, None, None] * x + coef[2][:, None, None] * y
     out = phase - plane.reshape(phase.shape)
     return np.where(m, out, 0.0)
 
@@ -306,8 +369,16 @@ def structure_function(screens, max_separation: int) -> tuple[np.ndarray, np.nda
     """
     s = np.asarray(screens, float)
     seps = np.arange(1, max_separation + 1)
-    D = np.array([0.5 * (np.mean((s[..., :, k:] - s[..., :, :-k]) ** 2) + np.mean((s[..., k:, :] - s[..., :-k, :]) ** 2))
-                  for k in seps])
+    D = np.array(
+        [
+            0.5
+            * (
+                np.mean((s[..., :, k:] - s[..., :, :-k]) ** 2)
+                + np.mean((s[..., k:, :] - s[..., :-k, :]) ** 2)
+            )
+            for k in seps
+        ]
+    )
     return seps, D
 
 
@@ -331,8 +402,12 @@ def structure_function_theory(r, r0, L0=np.inf, l0=0.0) -> np.ndarray:
         # [0, 1] with u = t^3 (the integrand ~ u^(-2/3) at 0 for Kolmogorov), then segments of 10
         head = integrate.quad(lambda t: g(t**3) * 3 * t * t, 0.0, 1.0, limit=200)[0]
         edges = np.r_[1.0, np.arange(10.0, 201.0, 10.0)]
-        body = head + sum(integrate.quad(g, a, b, limit=200)[0] for a, b in zip(edges[:-1], edges[1:]))
-        tail = integrate.quad(lambda u, c=c: phase_psd(u / c, r0, L0, l0) * u, 200.0, np.inf, limit=200)[0]
+        body = head + sum(
+            integrate.quad(g, a, b, limit=200)[0] for a, b in zip(edges[:-1], edges[1:])
+        )
+        tail = integrate.quad(
+            lambda u, c=c: phase_psd(u / c, r0, L0, l0) * u, 200.0, np.inf, limit=200
+        )[0]
         out[i] = 4 * np.pi * (body + tail) / c**2
     return out
 
@@ -341,4 +416,6 @@ def phase_variance_theory(r0, L0, l0=0.0) -> float:
     """Total phase variance [rad^2] of von Karman turbulence: 2 pi int Phi(f) f df (finite for finite L0)."""
     if np.isinf(L0):
         raise ValueError("the phase variance of Kolmogorov turbulence (L0 = inf) is infinite")
-    return 2 * np.pi * integrate.quad(lambda f: phase_psd(f, r0, L0, l0) * f, 0, np.inf, limit=400)[0]
+    return (
+        2 * np.pi * integrate.quad(lambda f: phase_psd(f, r0, L0, l0) * f, 0, np.inf, limit=400)[0]
+    )

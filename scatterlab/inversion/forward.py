@@ -163,7 +163,8 @@ class DolpForward:
     def fraction(self, sigma, *, gradient: bool = False):
         """Specular fraction Gamma/(Gamma + D) (..., M) and, with ``gradient``, its sigma derivative (..., M).
 
-        For Beckmann slopes, Torrance-Sparrow (or no) shadowing and the "hyde" diffuse term: Gamma exactly (analytic in sigma) and D
+        For Beckmann slopes, Torrance-Sparrow (or no) shadowing and the "hyde" diffuse term: Gamma
+        exactly (analytic in sigma) and D
         interpolated (cubic Hermite) in log sigma on 4097 nodes over [1e-3, 2.5] (measured error in the tests);
         otherwise Model.specular_fraction with a central difference.
         """

@@ -1,6 +1,7 @@
 r"""Electric-field integral equation for TM (E_z) scattering by a perfect conductor (Eqs. 178-181).
 
-With time dependence exp(+j w t) and :math:`G(\mathbf r, \mathbf r') = -\frac{j}{4}H_0^{(2)}(k|\mathbf r - \mathbf r'|)`,
+With time dependence exp(+j w t) and
+:math:`G(\mathbf r, \mathbf r') = -\frac{j}{4}H_0^{(2)}(k|\mathbf r - \mathbf r'|)`,
 the total field vanishes on the conductor and the unknown is :math:`U = \partial\psi/\partial n`
 (n out of the conductor), proportional to the surface current :math:`J_z = U/(j\omega\mu_0)`:
 
@@ -11,7 +12,8 @@ Pulse basis and point matching (Eqs. 179-180): ``N`` pulses centred at the given
 :math:`\Delta s_n`. Matrix elements :math:`A_{mn} = -\frac j4\int_{C_n}H_0^{(2)}(kR_m(s))ds`:
 
 * diagonal: the exact integral over the straight pulse,
-  :math:`-\frac j4\frac2k\left[\int_0^{k\Delta s_n/2}J_0 - j\int_0^{k\Delta s_n/2}Y_0\right]` (``scipy.special.itj0y0``);
+  :math:`-\frac j4\frac2k\left[\int_0^{k\Delta s_n/2}J_0 - j\int_0^{k\Delta s_n/2}Y_0\right]`
+  (``scipy.special.itj0y0``);
   its small-argument expansion :math:`-\frac j4\Delta s_n[1 - \frac{2j}{\pi}\ln\frac{\gamma k\Delta s_n}{4e}]`
   (:func:`self_term_small_argument`) is off by O((k ds)^2) -- 0.9 % excess energy at 10 points per wavelength;
 * neighbours (|m - n| = 1): 8-point Gauss-Legendre along the pulse's tangent;
@@ -42,12 +44,21 @@ from scipy import linalg, special
 
 from scatterlab._checks import as_finite, as_positive
 
-__all__ = ["Contour", "contour", "impedance_matrix", "solve_tm", "Solution", "physical_optics_current"]
+__all__ = [
+    "Contour",
+    "contour",
+    "impedance_matrix",
+    "solve_tm",
+    "Solution",
+    "physical_optics_current",
+]
 
 EULER_GAMMA = np.exp(np.euler_gamma)
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 _NEAR_OFFSETS = (1, -1)
-_BAND_WAVELENGTHS = 3.0  # corrected-midpoint band half-width (energy error < 5e-4 at 10 points per wavelength)
+_BAND_WAVELENGTHS = (
+    3.0  # corrected-midpoint band half-width (energy error < 5e-4 at 10 points per wavelength)
+)
 
 
 @dataclass
@@ -91,8 +102,10 @@ def contour(x, y, closed: bool = False) -> Contour:
         step = np.hypot(np.roll(x, -1) - x, np.roll(y, -1) - y)
         if np.any(step <= 1e-12 * np.max(step)) or np.any(ds <= 0):
             bad = int(np.argmin(step))
-            raise ValueError(f"closed contour has coincident consecutive points (x, y) at index {bad}: "
-                             "points must be distinct (do not repeat the first point at the end)")
+            raise ValueError(
+                f"closed contour has coincident consecutive points (x, y) at index {bad}: "
+                "points must be distinct (do not repeat the first point at the end)"
+            )
     tx, ty = dx / ds, dy / ds
     # open profile: conductor below, normal up = (-ty, tx); closed ccw body: outward = (ty, -tx)
     nx, ny = (ty, -tx) if closed else (-ty, tx)
@@ -146,8 +159,13 @@ def _fill_block(A, c, k, start, stop):
         R = np.maximum(R, 1e-300)
         # integral of exp(-jkR) over a straight pulse: the phase-corrected midpoint rule, a factor
         # sinc(k ds cos(a) / 2) with a the angle between the source pulse and R (observer m in the rows)
-        A[rows, start:] = H * _sinc(k / 2 * c.ds[None, start:] * (c.tx[None, start:] * DX + c.ty[None, start:] * DY) / R)
-        A[start:, rows] = (H * _sinc(k / 2 * c.ds[rows, None] * (c.tx[rows, None] * DX + c.ty[rows, None] * DY) / R)).T
+        A[rows, start:] = H * _sinc(
+            k / 2 * c.ds[None, start:] * (c.tx[None, start:] * DX + c.ty[None, start:] * DY) / R
+        )
+        A[start:, rows] = (
+            H
+            * _sinc(k / 2 * c.ds[rows, None] * (c.tx[rows, None] * DX + c.ty[rows, None] * DY) / R)
+        ).T
 
 
 def impedance_matrix(c: Contour, k: float) -> np.ndarray:
@@ -155,7 +173,9 @@ def impedance_matrix(c: Contour, k: float) -> np.ndarray:
     N = c.size
     A = np.empty((N, N), complex)
     # one triangle of kR (symmetric), in row blocks to bound the temporaries
-    block = max(16, int(-(-N // (4 * (os.cpu_count() or 1)))) if N * N < 4e7 else max(1, int(1e6 // N)))
+    block = max(
+        16, int(-(-N // (4 * (os.cpu_count() or 1)))) if N * N < 4e7 else max(1, int(1e6 // N))
+    )
     _fill_far(A, c, k, block)
     A *= (-0.25j) * c.ds[None, :]
     i = np.arange(N)
@@ -168,7 +188,7 @@ def impedance_matrix(c: Contour, k: float) -> np.ndarray:
     band = int(np.ceil(_BAND_WAVELENGTHS * 2 * np.pi / k / np.median(c.ds)))
     for off in range(2, min(band, N - 1) + 1):
         for sgn in (1, -1):
-            m = i if c.closed else i[max(0, -sgn * off):N - max(0, sgn * off)]
+            m = i if c.closed else i[max(0, -sgn * off) : N - max(0, sgn * off)]
             n = (m + sgn * off) % N
             dx, dy = c.x[m] - c.x[n], c.y[m] - c.y[n]
             R = np.hypot(dx, dy)
@@ -180,7 +200,7 @@ def impedance_matrix(c: Contour, k: float) -> np.ndarray:
             A[m, n] = -0.25j * c.ds[n] * (h0 + c.ds[n] ** 2 / 24 * f2)
     # neighbours: Gauss-Legendre over the source pulse along its tangent
     for off in _NEAR_OFFSETS:
-        m = i[max(0, -off):N - max(0, off)] if not c.closed else i
+        m = i[max(0, -off) : N - max(0, off)] if not c.closed else i
         n = (m + off) % N
         s = 0.5 * c.ds[n][:, None] * _GL_X[None, :]
         px = c.x[n][:, None] + c.tx[n][:, None] * s
@@ -244,14 +264,18 @@ class Solution:
         F = phase @ (U2 * c.ds[:, None])
         if psi is not None:
             P2 = psi if psi.ndim == 2 else psi[:, None]
-            F = F - (1j * k * (sx * c.nx[None, :] + sy * c.ny[None, :]) * phase) @ (P2 * c.ds[:, None])
+            F = F - (1j * k * (sx * c.nx[None, :] + sy * c.ny[None, :]) * phase) @ (
+                P2 * c.ds[:, None]
+            )
         return F if U.ndim == 2 else F[:, 0]
 
     def far_field(self, theta_s) -> np.ndarray:
         """F(theta_s) (S,) or (S, K): sum_n [U_n - jk (n_n . r) psi_n] ds_n exp(jk(x_n sin + y_n cos));
         theta_s [rad] from the vertical (direction r = (sin, cos)); psi = 0 for the s-pol PEC (Eq. 181)."""
         th = _angles(theta_s, "theta_s")
-        F = self._radiated(self.k, np.sin(th)[:, None], np.cos(th)[:, None], self.current, self.surface_field)
+        F = self._radiated(
+            self.k, np.sin(th)[:, None], np.cos(th)[:, None], self.current, self.surface_field
+        )
         return F if np.ndim(theta_s) else F[0]
 
     def echo_width(self, theta_s) -> np.ndarray:
@@ -283,17 +307,22 @@ class Solution:
         Needs a penetrable open surface, a real index (no far field inside an absorber) and tapered incidences.
         """
         if self.eta is None or self.contour.closed or self.method != "exact":
-            raise ValueError("transmission_coefficient needs a penetrable open surface solved with "
-                             "method='exact' (eta given, closed=False)")
+            raise ValueError(
+                "transmission_coefficient needs a penetrable open surface solved with "
+                "method='exact' (eta given, closed=False)"
+            )
         if np.imag(self.eta) != 0:
-            raise ValueError(f"transmission_coefficient needs a lossless lower medium (kappa = 0), got eta = "
-                             f"{self.eta}: the field decays inside an absorber and has no far field")
+            raise ValueError(
+                f"transmission_coefficient needs a lossless lower medium (kappa = 0), got eta = "
+                f"{self.eta}: the field decays inside an absorber and has no far field"
+            )
         th = _angles(theta_t, "theta_t", np.pi / 2)
         n2 = float(np.real(self.eta))
         k2 = self.k * n2
         rho = 1.0 if self.polarization == "s" else n2 * n2
-        F2 = self._radiated(k2, np.sin(th)[:, None], -np.cos(th)[:, None], rho * self.current,
-                            self.surface_field)
+        F2 = self._radiated(
+            k2, np.sin(th)[:, None], -np.cos(th)[:, None], rho * self.current, self.surface_field
+        )
         T = np.abs(F2) ** 2 / (8 * np.pi * self.k * (1.0 if self.polarization == "s" else n2 * n2))
         T = T / self._powers()
         return T if np.ndim(theta_t) else T[0]
@@ -303,8 +332,10 @@ def _angles(theta, name, limit=np.pi):
     """Angles [rad] as a 1-D array, finite and within [-limit, limit]."""
     th = np.atleast_1d(np.asarray(theta, float))
     if not np.all(np.isfinite(th)) or np.any(np.abs(th) > limit):
-        raise ValueError(f"{name} must be finite angles in [-{limit:.4g}, {limit:.4g}] rad (angles are in "
-                         "radians)")
+        raise ValueError(
+            f"{name} must be finite angles in [-{limit:.4g}, {limit:.4g}] rad (angles are in "
+            "radians)"
+        )
     return th
 
 
@@ -316,12 +347,17 @@ def check_sampling(c: Contour, wavelength: float, min_ppw: float, where: str = "
     where = f" {where}" if where else ""
     ppw = wavelength / np.max(c.ds)
     if ppw < min_ppw:
-        raise ValueError(f"sampling of {ppw:.2f} points per wavelength{where} (longest pulse) is below "
-                         f"{min_ppw:g}: use a finer dx (at least 10 per wavelength recommended)")
+        raise ValueError(
+            f"sampling of {ppw:.2f} points per wavelength{where} (longest pulse) is below "
+            f"{min_ppw:g}: use a finer dx (at least 10 per wavelength recommended)"
+        )
     typical = wavelength / np.median(c.ds)
     if typical < 8:
-        warnings.warn(f"only {typical:.1f} points per wavelength{where} (median pulse): expect errors of "
-                      "several percent", stacklevel=3)
+        warnings.warn(
+            f"only {typical:.1f} points per wavelength{where} (median pulse): expect errors of "
+            "several percent",
+            stacklevel=3,
+        )
 
 
 def check_incidences(incs, c: Contour, k: float) -> None:
@@ -333,8 +369,19 @@ def check_incidences(incs, c: Contour, k: float) -> None:
             inc.check(k, length, extent)
 
 
-def solve_tm(x, y, wavelength, incidence, closed: bool = False, *, solver: str = "lu", tol: float = 1e-6,
-             max_iter: int = 50, block: int = 256, min_points_per_wavelength: float = 5.0) -> Solution:
+def solve_tm(
+    x,
+    y,
+    wavelength,
+    incidence,
+    closed: bool = False,
+    *,
+    solver: str = "lu",
+    tol: float = 1e-6,
+    max_iter: int = 50,
+    block: int = 256,
+    min_points_per_wavelength: float = 5.0,
+) -> Solution:
     """Solve the TM EFIE on a PEC contour for one incidence or a list (one factorisation for all).
 
     Parameters
@@ -371,11 +418,16 @@ def solve_tm(x, y, wavelength, incidence, closed: bool = False, *, solver: str =
     t0 = time.perf_counter()
     used = solver
     if solver == "lu":
-        U = linalg.lu_solve(linalg.lu_factor(A, overwrite_a=False, check_finite=False), V, check_finite=False)
+        U = linalg.lu_solve(
+            linalg.lu_factor(A, overwrite_a=False, check_finite=False), V, check_finite=False
+        )
     elif solver == "fb":
         U, info = forward_backward(A, V, tol=tol, max_iter=max_iter, block=block)
         if not info["converged"]:
-            warnings.warn(f"forward-backward did not converge ({info['reason']}); falling back to LU", stacklevel=2)
+            warnings.warn(
+                f"forward-backward did not converge ({info['reason']}); falling back to LU",
+                stacklevel=2,
+            )
             U = linalg.lu_solve(linalg.lu_factor(A, check_finite=False), V, check_finite=False)
             used = "lu (fallback)"
     else:
@@ -383,5 +435,12 @@ def solve_tm(x, y, wavelength, incidence, closed: bool = False, *, solver: str =
     t_solve = time.perf_counter() - t0
     res = np.linalg.norm(A @ U - V, axis=0) / np.linalg.norm(V, axis=0)
     single = not isinstance(incidence, (list, tuple))
-    return Solution(contour=c, k=k, current=U[:, 0] if single else U, incidences=incs, residual=res,
-                    timings={"fill": t_fill, "solve": t_solve}, solver=used)
+    return Solution(
+        contour=c,
+        k=k,
+        current=U[:, 0] if single else U,
+        incidences=incs,
+        residual=res,
+        timings={"fill": t_fill, "solve": t_solve},
+        solver=used,
+    )

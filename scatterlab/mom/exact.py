@@ -32,8 +32,11 @@ __all__ = ["cylinder_echo_width", "cylinder_surface_field", "cylinder_coefficien
 
 def _orders(ka, m=None):
     re = 1.0 if m is None else max(1.0, float(np.real(m)))
-    N = int(np.ceil(ka * re + 4 * (ka * re) ** (1 / 3) + 15)) if m is not None else \
-        int(np.ceil(ka + 4 * ka ** (1 / 3) + 10))
+    N = (
+        int(np.ceil(ka * re + 4 * (ka * re) ** (1 / 3) + 15))
+        if m is not None
+        else int(np.ceil(ka + 4 * ka ** (1 / 3) + 10))
+    )
     return np.arange(-N, N + 1)
 
 
@@ -66,7 +69,9 @@ def cylinder_coefficients(ka, polarization: str = "s", eta=None):
     return n, a, J - a * H
 
 
-def cylinder_echo_width(ka, phi, wavelength: float = 1.0, *, polarization: str = "s", eta=None) -> np.ndarray:
+def cylinder_echo_width(
+    ka, phi, wavelength: float = 1.0, *, polarization: str = "s", eta=None
+) -> np.ndarray:
     """sigma_2D(phi) [m] for a cylinder of electrical radius ``ka``; ``phi`` [rad] from forward.
 
     ``eta=None`` is the perfect conductor; ``polarization`` "s" (E_z) or "p" (H_z).

@@ -9,7 +9,8 @@ r"""Incident fields for the TM (E_z, s-polarized) problem, time dependence exp(+
   .. math:: \psi = e^{-jk(x\sin\theta - y\cos\theta)(1 + w)}\, e^{-(x + y\tan\theta)^2/g^2},\quad
             w = \frac{2(x + y\tan\theta)^2/g^2 - 1}{(kg\cos\theta)^2}
 
-  (x measured from the taper's centre ``x0``, which also is the phase reference). The power it carries down through a horizontal line is
+  (x measured from the taper's centre ``x0``, which also is the phase reference). The power it
+  carries down through a horizontal line is
 
   .. math:: P_{inc} = g\sqrt{\pi/2}\,\cos\theta\left[1 - \frac{1 + 2\tan^2\theta}{2k^2g^2\cos^2\theta}\right]
 
@@ -35,17 +36,23 @@ class PlaneWave:
 
     def __post_init__(self):
         if not np.isfinite(self.theta) or abs(self.theta) > 2 * np.pi:
-            raise ValueError(f"theta must be a finite angle in [-2 pi, 2 pi] rad, got {self.theta!r}")
+            raise ValueError(
+                f"theta must be a finite angle in [-2 pi, 2 pi] rad, got {self.theta!r}"
+            )
 
     def check(self, k: float, length: float | None = None, extent=None) -> None:
         """On an open surface (``length`` given) the wave must come from above: |theta| < pi/2."""
         if length is not None and not abs(self.theta) < np.pi / 2:
-            raise ValueError(f"theta must be in (-pi/2, pi/2) rad for an open surface, got {self.theta!r}")
+            raise ValueError(
+                f"theta must be in (-pi/2, pi/2) rad for an open surface, got {self.theta!r}"
+            )
 
     def incident_power(self, k: float) -> float:
         """A plane wave carries infinite power onto an open surface: use :class:`TaperedWave` instead."""
-        raise ValueError("a PlaneWave has no finite incident power: scattering coefficients and energies need a "
-                         "TaperedWave on an open surface (use echo_width or far_field for a plane wave)")
+        raise ValueError(
+            "a PlaneWave has no finite incident power: scattering coefficients and energies need a "
+            "TaperedWave on an open surface (use echo_width or far_field for a plane wave)"
+        )
 
     def direction(self):
         return np.array([np.sin(self.theta), -np.cos(self.theta)])
@@ -70,12 +77,16 @@ class TaperedWave:
 
     def __post_init__(self):
         if not -np.pi / 2 < self.theta < np.pi / 2:
-            raise ValueError(f"theta must be in (-pi/2, pi/2) rad (-90, 90 deg) for a tapered wave, got "
-                             f"{self.theta!r}")
+            raise ValueError(
+                f"theta must be in (-pi/2, pi/2) rad (-90, 90 deg) for a tapered wave, got "
+                f"{self.theta!r}"
+            )
         if not (np.isfinite(self.g) and self.g > 0):
             raise ValueError(f"g (taper width) must be finite and > 0 [m], got {self.g!r}")
         if not np.isfinite(self.x0):
-            raise ValueError(f"x0 (taper centre) must be a finite position [m] on the surface, got {self.x0!r}")
+            raise ValueError(
+                f"x0 (taper centre) must be a finite position [m] on the surface, got {self.x0!r}"
+            )
 
     def check(self, k: float, length: float | None = None, extent=None) -> None:
         """Raise ValueError when the taper is too narrow for the angle, the surface too short for the taper,
@@ -84,30 +95,42 @@ class TaperedWave:
         kgc = k * self.g * np.cos(self.theta)
         if kgc < 10:
             g_min = 10 / (k * np.cos(self.theta))
-            raise ValueError(f"taper too narrow for theta = {np.degrees(self.theta):.1f} deg: k g cos(theta) = "
-                             f"{kgc:.2f} < 10; use g >= {g_min:.4g} m (a longer surface may be needed)")
+            raise ValueError(
+                f"taper too narrow for theta = {np.degrees(self.theta):.1f} deg: k g cos(theta) = "
+                f"{kgc:.2f} < 10; use g >= {g_min:.4g} m (a longer surface may be needed)"
+            )
         corr = (1 + 2 * np.tan(self.theta) ** 2) / (2 * kgc**2)
         if corr > 0.02:
             g_min = np.sqrt((1 + 2 * np.tan(self.theta) ** 2) / 0.04) / (k * np.cos(self.theta))
-            raise ValueError(f"taper too narrow for theta = {np.degrees(self.theta):.1f} deg: the tapered wave's power "
-                             f"correction (1 + 2 tan^2)/(2 (k g cos)^2) = {corr:.3f} exceeds 0.02 (energy errors of "
-                             f"several percent); use g >= {g_min:.4g} m and a surface of at least 4 g")
+            raise ValueError(
+                f"taper too narrow for theta = {np.degrees(self.theta):.1f} deg: the tapered wave's power "
+                f"correction (1 + 2 tan^2)/(2 (k g cos)^2) = {corr:.3f} exceeds 0.02 (energy errors of "
+                f"several percent); use g >= {g_min:.4g} m and a surface of at least 4 g"
+            )
         if not self.correction and kgc**-2 > 1e-3:
-            raise ValueError(f"the plain Gaussian window (Eq. 182) needs (k g cos(theta))^-2 < 1e-3, got {kgc**-2:.2g}: "
-                             "use correction=True (Thorsos) or a wider g")
+            raise ValueError(
+                f"the plain Gaussian window (Eq. 182) needs (k g cos(theta))^-2 < 1e-3, got {kgc**-2:.2g}: "
+                "use correction=True (Thorsos) or a wider g"
+            )
         if length is not None and length < 4 * self.g * (1 - 1e-9):
-            raise ValueError(f"surface of length {length:.4g} m too short for taper g = {self.g:.4g} m: need "
-                             f"length >= 4 g (g <= {length / 4:.4g} m), or the taper is cut at its edges")
+            raise ValueError(
+                f"surface of length {length:.4g} m too short for taper g = {self.g:.4g} m: need "
+                f"length >= 4 g (g <= {length / 4:.4g} m), or the taper is cut at its edges"
+            )
         if extent is not None:
             lo, hi = float(extent[0]), float(extent[1])
             half = 0.5 * (hi - lo) / max(1, extent[2] - 1) if len(extent) > 2 else 0.0
             lo, hi = lo - half, hi + half  # the ends of the first and last pulses
             if not lo <= self.x0 <= hi:
-                raise ValueError(f"x0 = {self.x0:.6g} m (taper centre) is off the surface [{lo:.6g}, {hi:.6g}] m")
+                raise ValueError(
+                    f"x0 = {self.x0:.6g} m (taper centre) is off the surface [{lo:.6g}, {hi:.6g}] m"
+                )
             if min(self.x0 - lo, hi - self.x0) < 1.9 * self.g:
-                raise ValueError(f"x0 = {self.x0:.6g} m puts the taper (g = {self.g:.4g} m) within 1.9 g of an end "
-                                 f"of the surface [{lo:.6g}, {hi:.6g}] m: centre it (x0 in "
-                                 f"[{lo + 1.9 * self.g:.6g}, {hi - 1.9 * self.g:.6g}] m)")
+                raise ValueError(
+                    f"x0 = {self.x0:.6g} m puts the taper (g = {self.g:.4g} m) within 1.9 g of an end "
+                    f"of the surface [{lo:.6g}, {hi:.6g}] m: centre it (x0 in "
+                    f"[{lo + 1.9 * self.g:.6g}, {hi - 1.9 * self.g:.6g}] m)"
+                )
 
     def _parts(self, x, y, k):
         t = np.tan(self.theta)

@@ -44,7 +44,7 @@ class IncoherentResult:
     stderr: np.ndarray
     coherent: np.ndarray
     incoherent: np.ndarray
-    energy: np.ndarray          # (P, I): integral of each partition's coefficient over theta_s
+    energy: np.ndarray  # (P, I): integral of each partition's coefficient over theta_s
     partitions: int
     seconds_fill: float
     seconds_solve: float
@@ -60,7 +60,9 @@ def partition_task(task):
     k = 2 * np.pi / wavelength
     x0 = 0.5 * (x[0] + x[-1])
     incs = [TaperedWave(t, g, x0=x0) for t in theta_i]
-    sol = solve(x, y, wavelength, incs, solver=solver, polarization=polarization, eta=eta, method=method)
+    sol = solve(
+        x, y, wavelength, incs, solver=solver, polarization=polarization, eta=eta, method=method
+    )
     F = sol.far_field(theta_s)  # (S, I)
     P = np.array([inc.incident_power(k) for inc in incs])
     coef = (np.abs(F) ** 2 / (8 * np.pi * k * P)).T
@@ -83,31 +85,54 @@ def surface_digest(x, y) -> str:
 
 def _settings(wavelength, theta_i, theta_s, g, n, polarization, eta, method):
     """The inputs every partition shares, as arrays for the checkpoint (compared on resume)."""
-    return {"wavelength": np.array(float(wavelength)), "theta_i": theta_i, "theta_s": theta_s,
-            "g": np.array(float(g)), "points_per_partition": np.array(n), "polarization": np.array(polarization),
-            "eta": np.array(complex(np.nan) if eta is None else complex(eta)), "method": np.array(method)}
+    return {
+        "wavelength": np.array(float(wavelength)),
+        "theta_i": theta_i,
+        "theta_s": theta_s,
+        "g": np.array(float(g)),
+        "points_per_partition": np.array(n),
+        "polarization": np.array(polarization),
+        "eta": np.array(complex(np.nan) if eta is None else complex(eta)),
+        "method": np.array(method),
+    }
 
 
 def _load_checkpoint(path, settings, digests):
     """Finished partitions of a checkpoint, after checking they come from the same inputs."""
     z = np.load(path)
     if "digest" not in z.files:
-        raise ValueError(f"checkpoint {path} carries no digest of its inputs (written by an older version): "
-                         "delete it or pass another checkpoint path")
+        raise ValueError(
+            f"checkpoint {path} carries no digest of its inputs (written by an older version): "
+            "delete it or pass another checkpoint path"
+        )
     for key, value in settings.items():
         old = z[key]
-        same = old.shape == value.shape and (np.array_equal(old, value, equal_nan=True) if old.dtype.kind in
-                                             "fc" else np.array_equal(old, value))
+        same = old.shape == value.shape and (
+            np.array_equal(old, value, equal_nan=True)
+            if old.dtype.kind in "fc"
+            else np.array_equal(old, value)
+        )
         if not same:
-            raise ValueError(f"checkpoint {path} was written for another {key} ({old!r}, now {value!r}): delete it "
-                             "or pass another checkpoint path")
+            raise ValueError(
+                f"checkpoint {path} was written for another {key} ({old!r}, now {value!r}): delete it "
+                "or pass another checkpoint path"
+            )
     done = {}
     for p in range(int(z["count"])):
         if p >= len(digests) or str(z["digest"][p]) != digests[p]:
-            raise ValueError(f"checkpoint {path}: partition {p} was computed on another surface (its digest "
-                             "differs): delete the checkpoint or pass another path")
+            raise ValueError(
+                f"checkpoint {path}: partition {p} was computed on another surface (its digest "
+                "differs): delete the checkpoint or pass another path"
+            )
         trans = z["transmitted"][p]
-        done[p] = (z["coef"][p], z["F"][p], z["energy"][p], float(z["fill"][p]), float(z["solve"][p]), trans)
+        done[p] = (
+            z["coef"][p],
+            z["F"][p],
+            z["energy"][p],
+            float(z["fill"][p]),
+            float(z["solve"][p]),
+            trans,
+        )
     return done
 
 
@@ -121,9 +146,22 @@ def _check_angles(theta_i, theta_s):
     return theta_i, theta_s
 
 
-def incoherent_scattering(x, y, wavelength, theta_i, theta_s, *, partitions: int, g=None, solver: str = "lu",
-                          executor=None, checkpoint=None, polarization: str = "s", eta=None,
-                          method: str = "exact") -> IncoherentResult:
+def incoherent_scattering(
+    x,
+    y,
+    wavelength,
+    theta_i,
+    theta_s,
+    *,
+    partitions: int,
+    g=None,
+    solver: str = "lu",
+    executor=None,
+    checkpoint=None,
+    polarization: str = "s",
+    eta=None,
+    method: str = "exact",
+) -> IncoherentResult:
     """Average the scattering coefficient over ``partitions`` equal pieces of the profile (x, y).
 
     Parameters
@@ -153,8 +191,21 @@ def incoherent_scattering(x, y, wavelength, theta_i, theta_s, *, partitions: int
     dx = x[1] - x[0]
     g = n * dx / 4 if g is None else float(g)
     eta = None if eta is None else complex(eta)
-    tasks = [(x[p * n:(p + 1) * n], y[p * n:(p + 1) * n], wavelength, theta_i, g, theta_s, solver,
-              polarization, eta, method) for p in range(partitions)]
+    tasks = [
+        (
+            x[p * n : (p + 1) * n],
+            y[p * n : (p + 1) * n],
+            wavelength,
+            theta_i,
+            g,
+            theta_s,
+            solver,
+            polarization,
+            eta,
+            method,
+        )
+        for p in range(partitions)
+    ]
     digests = [surface_digest(t[0], t[1]) for t in tasks]
     settings = _settings(wavelength, theta_i, theta_s, g, n, polarization, eta, method)
     ckpt = Path(checkpoint) if checkpoint is not None else None
@@ -164,8 +215,10 @@ def incoherent_scattering(x, y, wavelength, theta_i, theta_s, *, partitions: int
     # in chunks, so a checkpoint is written every few partitions
     chunk = max(1, 2 * getattr(ex, "workers", 1)) if ckpt is not None else len(todo) or 1
     for start in range(0, len(todo), chunk):
-        ids = todo[start:start + chunk]
-        for p, r in zip(ids, ex.map(partition_task, [tasks[p] for p in ids], desc="MoM partitions")):
+        ids = todo[start : start + chunk]
+        for p, r in zip(
+            ids, ex.map(partition_task, [tasks[p] for p in ids], desc="MoM partitions")
+        ):
             done[p] = r
         if ckpt is not None:
             _save_checkpoint(ckpt, done, digests, settings)
@@ -177,24 +230,43 @@ def _save_checkpoint(ckpt, done, digests, settings):
     while count in done:
         count += 1
     keys = range(count)
-    write_npz(ckpt, overwrite=True, count=np.array(count), digest=np.array(digests[:count]),
-              coef=np.stack([done[p][0] for p in keys]), F=np.stack([done[p][1] for p in keys]),
-              energy=np.stack([done[p][2] for p in keys]), fill=np.array([done[p][3] for p in keys]),
-              solve=np.array([done[p][4] for p in keys]), transmitted=np.stack([done[p][5] for p in keys]),
-              **settings)
+    write_npz(
+        ckpt,
+        overwrite=True,
+        count=np.array(count),
+        digest=np.array(digests[:count]),
+        coef=np.stack([done[p][0] for p in keys]),
+        F=np.stack([done[p][1] for p in keys]),
+        energy=np.stack([done[p][2] for p in keys]),
+        fill=np.array([done[p][3] for p in keys]),
+        solve=np.array([done[p][4] for p in keys]),
+        transmitted=np.stack([done[p][5] for p in keys]),
+        **settings,
+    )
 
 
 def _average(done, partitions, theta_i, theta_s, wavelength, g, polarization, eta):
-    coef = np.stack([done[p][0] for p in range(partitions)])      # (P, I, S)
-    F = np.stack([done[p][1] for p in range(partitions)])         # (P, S, I)
+    coef = np.stack([done[p][0] for p in range(partitions)])  # (P, I, S)
+    F = np.stack([done[p][1] for p in range(partitions)])  # (P, S, I)
     k = 2 * np.pi / wavelength
     P_inc = np.array([TaperedWave(t, g).incident_power(k) for t in theta_i])
     coherent = (np.abs(F.mean(0)) ** 2 / (8 * np.pi * k * P_inc)).T
     mean = coef.mean(0)
-    stderr = coef.std(0, ddof=1) / np.sqrt(partitions) if partitions > 1 else np.full(mean.shape, np.nan)
-    return IncoherentResult(theta_i=theta_i, theta_s=theta_s, mean=mean, stderr=stderr, coherent=coherent,
-                            incoherent=mean - coherent, energy=np.stack([done[p][2] for p in range(partitions)]),
-                            partitions=partitions, seconds_fill=float(sum(done[p][3] for p in range(partitions))),
-                            seconds_solve=float(sum(done[p][4] for p in range(partitions))),
-                            transmitted=np.stack([done[p][5] for p in range(partitions)]),
-                            polarization=polarization, eta=eta)
+    stderr = (
+        coef.std(0, ddof=1) / np.sqrt(partitions) if partitions > 1 else np.full(mean.shape, np.nan)
+    )
+    return IncoherentResult(
+        theta_i=theta_i,
+        theta_s=theta_s,
+        mean=mean,
+        stderr=stderr,
+        coherent=coherent,
+        incoherent=mean - coherent,
+        energy=np.stack([done[p][2] for p in range(partitions)]),
+        partitions=partitions,
+        seconds_fill=float(sum(done[p][3] for p in range(partitions))),
+        seconds_solve=float(sum(done[p][4] for p in range(partitions))),
+        transmitted=np.stack([done[p][5] for p in range(partitions)]),
+        polarization=polarization,
+        eta=eta,
+    )

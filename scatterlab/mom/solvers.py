@@ -33,14 +33,18 @@ def forward_backward(A, V, *, tol: float = 1e-6, max_iter: int = 50, block: int 
     info = {"converged": False, "iterations": 0, "updates": updates, "reason": "max_iter reached"}
     for it in range(max_iter):
         for bi, b in enumerate(blocks):  # forward sweep
-            rhs = V2[b] - A[b, :b.start] @ U[:b.start] - A[b, b.stop:] @ U[b.stop:]
+            rhs = V2[b] - A[b, : b.start] @ U[: b.start] - A[b, b.stop :] @ U[b.stop :]
             U[b] = linalg.lu_solve(lus[bi], rhs, check_finite=False)
         for bi in range(len(blocks) - 1, -1, -1):  # backward sweep
             b = blocks[bi]
-            rhs = V2[b] - A[b, :b.start] @ U[:b.start] - A[b, b.stop:] @ U[b.stop:]
+            rhs = V2[b] - A[b, : b.start] @ U[: b.start] - A[b, b.stop :] @ U[b.stop :]
             U[b] = linalg.lu_solve(lus[bi], rhs, check_finite=False)
         # the relative change of U needs no extra product with A (one sweep pair already costs two)
-        r = float(np.max(np.linalg.norm(U - U_old, axis=0) / np.maximum(np.linalg.norm(U, axis=0), 1e-300)))
+        r = float(
+            np.max(
+                np.linalg.norm(U - U_old, axis=0) / np.maximum(np.linalg.norm(U, axis=0), 1e-300)
+            )
+        )
         U_old[...] = U
         updates.append(r)
         info["iterations"] = it + 1

@@ -32,7 +32,7 @@ def correlation_length_for_slope(sigma_h, slope):
 
 def gaussian_spectrum(k, sigma_h, corr_length):
     """Two-sided power spectrum W(k) [m^3] of the Gaussian correlation function; integrates to sigma_h^2."""
-    return sigma_h**2 * corr_length / (2 * np.sqrt(np.pi)) * np.exp(-(k * corr_length) ** 2 / 4)
+    return sigma_h**2 * corr_length / (2 * np.sqrt(np.pi)) * np.exp(-((k * corr_length) ** 2) / 4)
 
 
 def rough_surface(length, dx, sigma_h, corr_length, rng):
@@ -55,7 +55,9 @@ def rough_surface(length, dx, sigma_h, corr_length, rng):
     sigma_h = float(as_positive(sigma_h, "sigma_h", allow_zero=True))
     corr_length = float(as_positive(corr_length, "corr_length"))
     if dx > corr_length / 4:
-        raise ValueError(f"dx = {dx:g} must be at most corr_length / 4 = {corr_length / 4:g} to resolve the surface")
+        raise ValueError(
+            f"dx = {dx:g} must be at most corr_length / 4 = {corr_length / 4:g} to resolve the surface"
+        )
     n = int(round(length / dx))
     if n < 8:
         raise ValueError("length must hold at least 8 samples of dx")

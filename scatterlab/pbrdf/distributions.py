@@ -96,14 +96,17 @@ class Beckmann(FacetDistribution):
         return np.exp(-np.asarray(tan2, float) / (2 * s2)) / (2 * np.pi * s2)
 
     def smith_lambda(self, tan_theta):
-        r"""Smith's :math:`\Lambda(\theta) = [e^{-a^2}/(a\sqrt\pi) - \mathrm{erfc}(a)]/2`, :math:`a = \cot\theta/(\sqrt2\sigma)`."""
+        r"""Smith's :math:`\Lambda(\theta) = [e^{-a^2}/(a\sqrt\pi) - \mathrm{erfc}(a)]/2`,
+        :math:`a = \cot\theta/(\sqrt2\sigma)`."""
         t = np.asarray(tan_theta, float)
         with np.errstate(divide="ignore"):
             a = np.where(t > 0, 1.0 / (np.sqrt(2.0) * self.sigma * np.where(t > 0, t, 1.0)), np.inf)
         return _beckmann_lambda(a)
 
     def smith_lambda_cos(self, cos_theta):
-        r""":math:`\cos\theta\,\Lambda = \tfrac12 e^{-a^2}\sqrt2\sigma\sin\theta\,(1/\sqrt\pi - a\,\mathrm{erfcx}(a))`, finite at grazing."""
+        r"""Finite at grazing:
+        :math:`\cos\theta\,\Lambda = \tfrac12 e^{-a^2}\sqrt2\sigma\sin\theta\,(1/\sqrt\pi - a\,\mathrm{erfcx}(a))`.
+        """
         c = np.clip(np.asarray(cos_theta, float), 0.0, 1.0)
         s = np.sqrt((1 - c) * (1 + c))
         k = np.sqrt(2.0) * self.sigma * s

@@ -110,8 +110,9 @@ def linear_retarder_jones(retardance, fast_axis=0.0) -> np.ndarray:
     -------
     J : ndarray, shape ``(..., 2, 2)``, complex, unitary.
     """
-    d, t = broadcast(retardance=as_finite(retardance, "retardance"),
-                     fast_axis=as_finite(fast_axis, "fast_axis"))
+    d, t = broadcast(
+        retardance=as_finite(retardance, "retardance"), fast_axis=as_finite(fast_axis, "fast_axis")
+    )
     J = np.zeros(d.shape + (2, 2), complex)
     J[..., 0, 0] = np.exp(0.5j * d)
     J[..., 1, 1] = np.exp(-0.5j * d)

@@ -269,7 +269,8 @@ def depolarizer(a=0.0) -> np.ndarray:
 
 
 def coherency_matrix(M) -> np.ndarray:
-    r"""Cloude coherency matrix :math:`H = \tfrac14\sum M_{ij}\sigma_i\otimes\sigma_j^*`, shape ``(..., 4, 4)``, Hermitian.
+    r"""Cloude coherency matrix :math:`H = \tfrac14\sum M_{ij}\sigma_i\otimes\sigma_j^*`, shape
+    ``(..., 4, 4)``, Hermitian.
 
     ``trace(H) = M00``; ``H`` is positive semi-definite iff ``M`` is physically realizable.
     """

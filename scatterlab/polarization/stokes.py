@@ -82,8 +82,15 @@ def stokes_vector(intensity=1.0, dop=0.0, aop=0.0, ellipticity=0.0) -> np.ndarra
     if np.any(np.abs(chi) > np.pi / 4 + 1e-15):
         raise ValueError("ellipticity must be in [-pi/4, pi/4] rad")
     I, p, psi, chi = np.broadcast_arrays(I, p, psi, chi)
-    return np.stack([I, I * p * np.cos(2 * chi) * np.cos(2 * psi),
-                     I * p * np.cos(2 * chi) * np.sin(2 * psi), I * p * np.sin(2 * chi)], -1)
+    return np.stack(
+        [
+            I,
+            I * p * np.cos(2 * chi) * np.cos(2 * psi),
+            I * p * np.cos(2 * chi) * np.sin(2 * psi),
+            I * p * np.sin(2 * chi),
+        ],
+        -1,
+    )
 
 
 def _ratio(num, den):

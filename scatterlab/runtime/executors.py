@@ -23,7 +23,14 @@ from typing import Any
 
 from scatterlab.runtime.progress import progress
 
-__all__ = ["Executor", "SerialExecutor", "ProcessExecutor", "DaskExecutor", "get_executor", "TaskError"]
+__all__ = [
+    "Executor",
+    "SerialExecutor",
+    "ProcessExecutor",
+    "DaskExecutor",
+    "get_executor",
+    "TaskError",
+]
 
 
 class TaskError(RuntimeError):
@@ -85,7 +92,9 @@ class ProcessExecutor(Executor):
         self.workers = workers or os.cpu_count() or 1
         # one BLAS/OpenMP thread per worker: workers x BLAS threads oversubscribe the cores (measured 14x
         # slower for the small linear algebra of an MCMC KDE move, 2 workers on 2 cores)
-        self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, initializer=_single_blas_thread)
+        self._pool = cf.ProcessPoolExecutor(
+            max_workers=self.workers, initializer=_single_blas_thread
+        )
 
     def map(self, fn, tasks, desc=None):
         tasks = list(tasks)
@@ -124,9 +133,12 @@ class DaskExecutor(Executor):
         if scheduler:
             self.client = Client(scheduler)
         else:
-            self._cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1,
-                                         threads_per_worker=1, processes=True,
-                                         dashboard_address=None)
+            self._cluster = LocalCluster(
+                n_workers=workers or os.cpu_count() or 1,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+            )
             self.client = Client(self._cluster)
 
     def map(self, fn, tasks, desc=None):
@@ -156,8 +168,9 @@ class DaskExecutor(Executor):
             self._cluster.close()
 
 
-def get_executor(kind: str = "serial", *, workers: int | None = None,
-                 scheduler: str | None = None) -> Executor:
+def get_executor(
+    kind: str = "serial", *, workers: int | None = None, scheduler: str | None = None
+) -> Executor:
     """Executor of the given kind: ``"serial"``, ``"processes"`` or ``"dask"``.
 
     A ``scheduler`` address implies ``"dask"``.

@@ -17,7 +17,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["atomic_write_bytes", "write_text", "write_json", "read_json", "write_npz", "to_jsonable"]
+__all__ = [
+    "atomic_write_bytes",
+    "write_text",
+    "write_json",
+    "read_json",
+    "write_npz",
+    "to_jsonable",
+]
 
 
 def atomic_write_bytes(path, data: bytes, *, overwrite: bool = False) -> Path:
@@ -69,8 +76,9 @@ def to_jsonable(obj: Any) -> Any:
 
 def write_json(path, obj: Any, *, overwrite: bool = False) -> Path:
     """Atomically write ``obj`` as indented JSON (numpy types converted)."""
-    return write_text(path, json.dumps(to_jsonable(obj), indent=2, sort_keys=False) + "\n",
-                      overwrite=overwrite)
+    return write_text(
+        path, json.dumps(to_jsonable(obj), indent=2, sort_keys=False) + "\n", overwrite=overwrite
+    )
 
 
 def read_json(path) -> Any:

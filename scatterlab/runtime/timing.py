@@ -24,7 +24,9 @@ class Stopwatch:
             self.times[name] = self.times.get(name, 0.0) + time.perf_counter() - t0
 
 
-def best_time(fn: Callable[[], object], *, repeat: int = 5, number: int = 1, budget: float = 10.0) -> float:
+def best_time(
+    fn: Callable[[], object], *, repeat: int = 5, number: int = 1, budget: float = 10.0
+) -> float:
     """Best-of-``repeat`` wall time [s] of ``number`` calls of ``fn``, divided by ``number``.
 
     Stops early once ``budget`` seconds have been spent (at least one repeat runs).

@@ -10,8 +10,11 @@ from scatterlab.imaging import ANGLES_0_45_90_135, channel_images, detect
 from scatterlab.plotting import headless_pyplot as plt
 from scatterlab.runtime import best_time
 
-STUDY = {"id": "perf_deconvolution", "title": "EM blind deconvolution: iterations vs error vs time; cost vs Richardson-Lucy",
-         "reproduces": "own performance study (issue 8, item 7)"}
+STUDY = {
+    "id": "perf_deconvolution",
+    "title": "EM blind deconvolution: iterations vs error vs time; cost vs Richardson-Lucy",
+    "reproduces": "own performance study (issue 8, item 7)",
+}
 
 
 def gaussian_psf(n, sd):
@@ -24,7 +27,7 @@ def two_material_scene(n, rng):
     lab = np.zeros((n, n), int)
     for _ in range(8):
         r, c = rng.integers(0, n - n // 6, 2)
-        lab[r:r + n // 6, c:c + n // 8] = 1
+        lab[r : r + n // 6, c : c + n // 8] = 1
     s0 = np.where(lab == 1, 2.0, 1.0)
     P = np.where(lab == 1, 0.05, 0.6)
     return np.stack([s0, P * s0, np.zeros_like(s0)]), P
@@ -40,13 +43,19 @@ def run(ctx):
     counts = detect(channel_images(S, ANGLES_0_45_90_135, h), rng, photons=5e3)
     rows = []
     with ctx.step("iterations"):
-        for it in ((5, 10, 20, 40) if ctx.quick else (5, 10, 20, 40, 80, 160)):
+        for it in (5, 10, 20, 40) if ctx.quick else (5, 10, 20, 40, 80, 160):
             t0 = time.perf_counter()
             res = blind_deconvolve(counts, ANGLES_0_45_90_135, iterations=it, psf_radius=n / 8)
             secs = time.perf_counter() - t0
             s0 = S[0] * res.s0.mean() / S[0].mean()
-            rows.append({"iterations": it, "seconds": secs, "dolp_rmse": float(np.sqrt(np.mean((res.dolp - P) ** 2))),
-                         "s0_relative_rmse": float(np.sqrt(np.mean((res.s0 - s0) ** 2)) / s0.mean())})
+            rows.append(
+                {
+                    "iterations": it,
+                    "seconds": secs,
+                    "dolp_rmse": float(np.sqrt(np.mean((res.dolp - P) ** 2))),
+                    "s0_relative_rmse": float(np.sqrt(np.mean((res.s0 - s0) ** 2)) / s0.mean()),
+                }
+            )
     ctx.metrics["iterations"] = rows
 
     m = 128 if ctx.quick else 512
@@ -54,31 +63,49 @@ def run(ctx):
     hm = gaussian_psf(m, 2.0)
     cm = detect(channel_images(Sm, ANGLES_0_45_90_135, hm), rng, photons=5e3)
     with ctx.step("per_iteration_cost"):
-        small = hm[m // 2 - 8:m // 2 + 9, m // 2 - 8:m // 2 + 9]
+        small = hm[m // 2 - 8 : m // 2 + 9, m // 2 - 8 : m // 2 + 9]
         t_rl = best_time(lambda: richardson_lucy(cm[0], small, num_iter=1, clip=False), repeat=5)
         per_iter = {}
         for boundary in ("periodic", "reeves"):
             # the difference of 4 and 0 iterations: set-up (initial Stokes images, first forward model) excluded
-            t4 = best_time(lambda: blind_deconvolve(cm, ANGLES_0_45_90_135, iterations=4, psf_radius=m / 8,
-                                                    boundary=boundary), repeat=3)
-            t0 = best_time(lambda: blind_deconvolve(cm, ANGLES_0_45_90_135, iterations=0, psf_radius=m / 8,
-                                                    boundary=boundary), repeat=3)
+            t4 = best_time(
+                lambda: blind_deconvolve(
+                    cm, ANGLES_0_45_90_135, iterations=4, psf_radius=m / 8, boundary=boundary
+                ),
+                repeat=3,
+            )
+            t0 = best_time(
+                lambda: blind_deconvolve(
+                    cm, ANGLES_0_45_90_135, iterations=0, psf_radius=m / 8, boundary=boundary
+                ),
+                repeat=3,
+            )
             per_iter[boundary] = max(t4 - t0, 1e-9) / 4
-    ctx.metrics["per_iteration"] = {"size": m, "rl_1_channel_s": t_rl,
-                                    **{f"em_4_channels_{b}_s": v for b, v in per_iter.items()},
-                                    **{f"ratio_{b}": v / t_rl for b, v in per_iter.items()},
-                                    "reeves_grid": m + 2 * int(np.ceil(m / 8))}
+    ctx.metrics["per_iteration"] = {
+        "size": m,
+        "rl_1_channel_s": t_rl,
+        **{f"em_4_channels_{b}_s": v for b, v in per_iter.items()},
+        **{f"ratio_{b}": v / t_rl for b, v in per_iter.items()},
+        "reeves_grid": m + 2 * int(np.ceil(m / 8)),
+    }
     pyplot = plt()
     fig, ax = pyplot.subplots(figsize=(6, 4))
     ax.loglog([r["seconds"] for r in rows], [r["dolp_rmse"] for r in rows], "o-", label="DOLP RMSE")
-    ax.loglog([r["seconds"] for r in rows], [r["s0_relative_rmse"] for r in rows], "s-", label="S0 relative RMSE")
+    ax.loglog(
+        [r["seconds"] for r in rows],
+        [r["s0_relative_rmse"] for r in rows],
+        "s-",
+        label="S0 relative RMSE",
+    )
     ax.set(xlabel="run time [s]", ylabel="error", title=f"{n} x {n}, 4 channels, blind (EM PSF)")
     ax.legend()
     ctx.save_figure(fig, "perf_deconvolution")
     r = ctx.metrics["per_iteration"]
-    ctx.say(f"One blind EM iteration over four {m} x {m} channels (S0, DOLP and PSF updates) costs "
-            f"{r['em_4_channels_periodic_s'] * 1e3:.0f} ms with periodic boundaries, {r['ratio_periodic']:.1f}x one "
-            f"scikit-image Richardson-Lucy iteration on one channel ({r['rl_1_channel_s'] * 1e3:.0f} ms; goal 4x), and "
-            f"{r['em_4_channels_reeves_s'] * 1e3:.0f} ms ({r['ratio_reeves']:.1f}x) with Reeves boundaries on the "
-            f"{r['reeves_grid']}^2 object grid. DOLP error {rows[0]['dolp_rmse']:.3f} after {rows[0]['iterations']} "
-            f"iterations, {rows[-1]['dolp_rmse']:.3f} after {rows[-1]['iterations']}.")
+    ctx.say(
+        f"One blind EM iteration over four {m} x {m} channels (S0, DOLP and PSF updates) costs "
+        f"{r['em_4_channels_periodic_s'] * 1e3:.0f} ms with periodic boundaries, {r['ratio_periodic']:.1f}x one "
+        f"scikit-image Richardson-Lucy iteration on one channel ({r['rl_1_channel_s'] * 1e3:.0f} ms; goal 4x), and "
+        f"{r['em_4_channels_reeves_s'] * 1e3:.0f} ms ({r['ratio_reeves']:.1f}x) with Reeves boundaries on the "
+        f"{r['reeves_grid']}^2 object grid. DOLP error {rows[0]['dolp_rmse']:.3f} after {rows[0]['iterations']} "
+        f"iterations, {rows[-1]['dolp_rmse']:.3f} after {rows[-1]['iterations']}."
+    )

@@ -17,8 +17,11 @@ from scatterlab.pbrdf.dhr import DHRTable
 from scatterlab.plotting import headless_pyplot as plt
 from scatterlab.runtime import best_time
 
-STUDY = {"id": "perf_dhr", "title": "DHR quadrature order and table size: error against run time",
-         "reproduces": "own performance study (issue 3, item 10)"}
+STUDY = {
+    "id": "perf_dhr",
+    "title": "DHR quadrature order and table size: error against run time",
+    "reproduces": "own performance study (issue 3, item 10)",
+}
 
 
 def run(ctx):
@@ -32,21 +35,34 @@ def run(ctx):
             ref = dhr_beckmann(theta, sigma, n_outer=48, n_inner=48)
             errs, times = [], []
             for n in orders:
-                t = best_time(lambda: dhr_beckmann(theta, sigma, n_outer=n, n_inner=n), repeat=3) / theta.size
-                errs.append(float(np.max(np.abs(dhr_beckmann(theta, sigma, n_outer=n, n_inner=n) - ref))))
+                t = (
+                    best_time(lambda: dhr_beckmann(theta, sigma, n_outer=n, n_inner=n), repeat=3)
+                    / theta.size
+                )
+                errs.append(
+                    float(np.max(np.abs(dhr_beckmann(theta, sigma, n_outer=n, n_inner=n) - ref)))
+                )
                 times.append(t)
             quad[sigma] = (errs, times)
             ax1.loglog(times, np.maximum(errs, 1e-17), "o-", label=rf"$\sigma$ = {sigma}")
             ctx.metrics[f"quadrature_error_sigma{sigma}"] = dict(zip(map(str, orders), errs))
-            ctx.metrics[f"quadrature_time_per_angle_s_sigma{sigma}"] = dict(zip(map(str, orders), times))
+            ctx.metrics[f"quadrature_time_per_angle_s_sigma{sigma}"] = dict(
+                zip(map(str, orders), times)
+            )
     ax1.set(xlabel="time per angle [s]", ylabel="max |error|", title="quadrature nodes per piece")
     ax1.legend()
     rows, smith = _tables(ctx, ax2)
     model = Model(0.3)
     model.dhr_pec(0.1)
     big_t = ctx.rng.uniform(0, np.pi / 2, 10**5)
-    ctx.metrics["lookup_1d_cache_s_per_point"] = best_time(lambda: model.dhr_pec(big_t), repeat=3) / big_t.size
-    ax2.set(xlabel="build time [s]", ylabel="max |error| at random points", title="table size (2 pieces)")
+    ctx.metrics["lookup_1d_cache_s_per_point"] = (
+        best_time(lambda: model.dhr_pec(big_t), repeat=3) / big_t.size
+    )
+    ax2.set(
+        xlabel="build time [s]",
+        ylabel="max |error| at random points",
+        title="table size (2 pieces)",
+    )
     ax2.legend(fontsize=7)
     ctx.metrics["tables"] = rows
     ctx.metrics["smith"] = smith
@@ -57,18 +73,25 @@ def run(ctx):
         f"function; 16 nodes per piece (the default) give errors {e16[0.01]:.1e}, {e16[0.3]:.1e}, {e16[1.0]:.1e} "
         f"for sigma = 0.01, 0.3, 1.0 at {quad[0.3][1][orders.index(16)] * 1e3:.1f} ms per angle."
     )
-    ctx.say("Tables (shadowing n_theta x n_sigma: max error at random points / build time / lookup per point): "
-            + "; ".join(f"{r['shadowing']} {r['n_theta']}x{r['n_sigma']}: {r['max_error']:.1e} / "
-                        f"{r['build_s']:.1f} s / {r['lookup_s_per_point'] * 1e9:.0f} ns" for r in rows)
-            + f". The shipped tables are 65x121 (stated error <= 1e-6, 1.5e-6 at cell centres for 'none'); "
-            f"a model with scalar sigma resamples its table once into a 1-D cache: "
-            f"{ctx.metrics['lookup_1d_cache_s_per_point'] * 1e9:.0f} ns per lookup.")
-    ctx.say(f"Smith shadowing with a diffuse term: {smith['model_s_per_geometry'] * 1e6:.2f} us per geometry "
-            f"(shipped table) against {smith['quadrature_s_per_angle'] * 1e3:.1f} ms for the per-point quadrature "
-            f"it used before, a ratio of {smith['speedup']:.0f} (Torrance-Sparrow: "
-            f"{smith['torrance_sparrow_s_per_geometry'] * 1e6:.2f} us, ratio "
-            f"{smith['ratio_to_torrance_sparrow']:.2f}); the shipped Smith table's error at "
-            f"{smith['n_points']} random points is {smith['shipped_max_error']:.1e}.")
+    ctx.say(
+        "Tables (shadowing n_theta x n_sigma: max error at random points / build time / lookup per point): "
+        + "; ".join(
+            f"{r['shadowing']} {r['n_theta']}x{r['n_sigma']}: {r['max_error']:.1e} / "
+            f"{r['build_s']:.1f} s / {r['lookup_s_per_point'] * 1e9:.0f} ns"
+            for r in rows
+        )
+        + f". The shipped tables are 65x121 (stated error <= 1e-6, 1.5e-6 at cell centres for 'none'); "
+        f"a model with scalar sigma resamples its table once into a 1-D cache: "
+        f"{ctx.metrics['lookup_1d_cache_s_per_point'] * 1e9:.0f} ns per lookup."
+    )
+    ctx.say(
+        f"Smith shadowing with a diffuse term: {smith['model_s_per_geometry'] * 1e6:.2f} us per geometry "
+        f"(shipped table) against {smith['quadrature_s_per_angle'] * 1e3:.1f} ms for the per-point quadrature "
+        f"it used before, a ratio of {smith['speedup']:.0f} (Torrance-Sparrow: "
+        f"{smith['torrance_sparrow_s_per_geometry'] * 1e6:.2f} us, ratio "
+        f"{smith['ratio_to_torrance_sparrow']:.2f}); the shipped Smith table's error at "
+        f"{smith['n_points']} random points is {smith['shipped_max_error']:.1e}."
+    )
 
 
 def _tables(ctx, ax):
@@ -78,9 +101,13 @@ def _tables(ctx, ax):
     n_pts = 40 if quick else 400
     th = rng.uniform(0, np.radians(89.5), n_pts)
     sg = np.exp(rng.uniform(np.log(1e-3), np.log(1.5), n_pts))
-    plans = {"torrance-sparrow": ((17, 31), (33, 61)) if quick else ((17, 31), (33, 61), (49, 91), (65, 121)),
-             "none": ((17, 31),) if quick else ((17, 31), (33, 61), (49, 91), (65, 121)),
-             "smith": ((17, 31),) if quick else ((17, 31), (33, 61), (65, 121))}
+    plans = {
+        "torrance-sparrow": ((17, 31), (33, 61))
+        if quick
+        else ((17, 31), (33, 61), (49, 91), (65, 121)),
+        "none": ((17, 31),) if quick else ((17, 31), (33, 61), (49, 91), (65, 121)),
+        "smith": ((17, 31),) if quick else ((17, 31), (33, 61), (65, 121)),
+    }
     rows = []
     refs = {}
     with ctx.step("tables"):
@@ -95,8 +122,16 @@ def _tables(ctx, ax):
                 err = float(np.max(np.abs(table(th, sg) - ref) / np.maximum(1.0, ref)))
                 big_t = rng.uniform(0, np.pi / 2, 10**5)
                 lookup = best_time(lambda: table(big_t, 0.3), repeat=3) / big_t.size
-                rows.append({"shadowing": shadowing, "n_theta": nt, "n_sigma": ns, "max_error": err,
-                             "build_s": build, "lookup_s_per_point": lookup})
+                rows.append(
+                    {
+                        "shadowing": shadowing,
+                        "n_theta": nt,
+                        "n_sigma": ns,
+                        "max_error": err,
+                        "build_s": build,
+                        "lookup_s_per_point": lookup,
+                    }
+                )
                 errs.append(err)
                 builds.append(build)
             ax.loglog(builds, errs, "s-", label=shadowing)
@@ -109,7 +144,13 @@ def _tables(ctx, ax):
         ts = Model(0.3)
         ts_geometry = best_time(lambda: ts.mueller(PEC, ti, tr, ph), repeat=3) / ti.size
         quad_t = best_time(lambda: dhr_beckmann(th[:10], 0.3, "smith"), repeat=3) / 10
-        smith = {"shipped_max_error": shipped, "n_points": n_pts, "model_s_per_geometry": per_geometry,
-                 "torrance_sparrow_s_per_geometry": ts_geometry, "quadrature_s_per_angle": quad_t,
-                 "speedup": quad_t / per_geometry, "ratio_to_torrance_sparrow": per_geometry / ts_geometry}
+        smith = {
+            "shipped_max_error": shipped,
+            "n_points": n_pts,
+            "model_s_per_geometry": per_geometry,
+            "torrance_sparrow_s_per_geometry": ts_geometry,
+            "quadrature_s_per_angle": quad_t,
+            "speedup": quad_t / per_geometry,
+            "ratio_to_torrance_sparrow": per_geometry / ts_geometry,
+        }
     return rows, smith

@@ -16,8 +16,11 @@ import numpy as np
 from scatterlab import fresnel, polarization
 from scatterlab.runtime import best_time
 
-STUDY = {"id": "perf_fresnel", "title": "Vectorised Fresnel and Jones-to-Mueller throughput vs a Python loop",
-         "reproduces": "own benchmark (issue 2, item 10)"}
+STUDY = {
+    "id": "perf_fresnel",
+    "title": "Vectorised Fresnel and Jones-to-Mueller throughput vs a Python loop",
+    "reproduces": "own benchmark (issue 2, item 10)",
+}
 
 
 def _loop_reflectances(eta, theta):
@@ -61,7 +64,9 @@ def run(ctx):
     res = {}
     with ctx.step("fresnel"):
         t_vec = best_time(lambda: fresnel.reflectances(eta, theta), repeat=3)
-        t_loop = best_time(lambda: _loop_reflectances(eta[:n_loop].tolist(), theta[:n_loop].tolist()), repeat=3)
+        t_loop = best_time(
+            lambda: _loop_reflectances(eta[:n_loop].tolist(), theta[:n_loop].tolist()), repeat=3
+        )
         Rs, Rp = fresnel.reflectances(eta[:n_loop], theta[:n_loop])
         ref = np.array(_loop_reflectances(eta[:n_loop].tolist(), theta[:n_loop].tolist()))
         res["fresnel"] = (n / t_vec, n_loop / t_loop, float(np.max(np.abs(ref - np.c_[Rs, Rp]))))

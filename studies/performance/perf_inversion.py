@@ -15,8 +15,11 @@ import numpy as np
 from scatterlab.inversion import fit_dolp, fit_dolp_per_pixel, model_dolp
 from scatterlab.plotting import headless_pyplot as plt
 
-STUDY = {"id": "perf_inversion", "title": "Batched vs per-pixel least squares of (n, kappa, sigma)",
-         "reproduces": "own performance study (issue 6, item 8)"}
+STUDY = {
+    "id": "perf_inversion",
+    "title": "Batched vs per-pixel least squares of (n, kappa, sigma)",
+    "reproduces": "own performance study (issue 6, item 8)",
+}
 
 TRUTHS = np.array([(1.39, 0.34), (1.44, 16.0), (3.6, 5.88)])
 SIGMA = 0.3
@@ -25,7 +28,9 @@ SIGMA = 0.3
 def image(rng, shape, theta_i, theta_r, sigma=SIGMA):
     labels = rng.integers(0, 3, shape)
     t = TRUTHS[labels]
-    return model_dolp(t[..., 0], t[..., 1], sigma, theta_i, theta_r) + 0.01 * rng.standard_normal(shape + (theta_i.size,))
+    return model_dolp(t[..., 0], t[..., 1], sigma, theta_i, theta_r) + 0.01 * rng.standard_normal(
+        shape + (theta_i.size,)
+    )
 
 
 def run(ctx):
@@ -47,16 +52,25 @@ def run(ctx):
     fn, fk, fc = (getattr(fit, a).reshape(-1)[pick] for a in ("n", "kappa", "cost"))
     same = np.abs(fc - base.cost) <= 1e-9 * np.maximum(base.cost, 1e-12) + 1e-15
     npix = flat.shape[0]
-    ctx.metrics.update({
-        "image_shape": [*shape, theta.size], "batched_s": t_batch, "batched_us_per_pixel": 1e6 * t_batch / npix,
-        "per_pixel_us_per_pixel": 1e6 * t_pix, "per_pixel_image_s_extrapolated": t_pix * npix,
-        "speedup": t_pix * npix / t_batch, "subset": subset,
-        "equal_cost_fraction": float(same.mean()),
-        "max_param_difference_equal_cost": float(np.max(np.abs(np.r_[fn - base.n, fk - base.kappa])[np.r_[same, same]]))
-        if same.any() else float("nan"),
-        "batched_lower_cost_fraction": float(np.mean(fc < base.cost * (1 - 1e-9))),
-        "converged_fraction": float(fit.converged.mean()),
-    })
+    ctx.metrics.update(
+        {
+            "image_shape": [*shape, theta.size],
+            "batched_s": t_batch,
+            "batched_us_per_pixel": 1e6 * t_batch / npix,
+            "per_pixel_us_per_pixel": 1e6 * t_pix,
+            "per_pixel_image_s_extrapolated": t_pix * npix,
+            "speedup": t_pix * npix / t_batch,
+            "subset": subset,
+            "equal_cost_fraction": float(same.mean()),
+            "max_param_difference_equal_cost": float(
+                np.max(np.abs(np.r_[fn - base.n, fk - base.kappa])[np.r_[same, same]])
+            )
+            if same.any()
+            else float("nan"),
+            "batched_lower_cost_fraction": float(np.mean(fc < base.cost * (1 - 1e-9))),
+            "converged_fraction": float(fit.converged.mean()),
+        }
+    )
 
     sizes = [(10, 10), (20, 25), (50, 64)] + ([] if ctx.quick else [(100, 126), (250, 316)])
     times = []
@@ -79,22 +93,35 @@ def run(ctx):
         t0 = time.perf_counter()
         b3 = fit_dolp_per_pixel(y3[:k], ti, tr)
         tp3 = (time.perf_counter() - t0) / k
-    ctx.metrics["sigma_fitted"] = {"speedup": tp3 / tb3, "batched_us_per_pixel": 1e6 * tb3,
-                                   "per_pixel_us_per_pixel": 1e6 * tp3,
-                                   "batched_cost_not_worse_fraction": float(np.mean(f3.cost[:k] <= b3.cost * (1 + 1e-6) + 1e-15))}
+    ctx.metrics["sigma_fitted"] = {
+        "speedup": tp3 / tb3,
+        "batched_us_per_pixel": 1e6 * tb3,
+        "per_pixel_us_per_pixel": 1e6 * tp3,
+        "batched_cost_not_worse_fraction": float(
+            np.mean(f3.cost[:k] <= b3.cost * (1 + 1e-6) + 1e-15)
+        ),
+    }
 
     pyplot = plt()
     fig, ax = pyplot.subplots(figsize=(6, 4))
     npx = [a * b for a, b in sizes]
     ax.loglog(npx, times, "o-", label="batched fit_dolp")
-    ax.loglog(npx, [t_pix * p for p in npx], "s--", label="per-pixel scipy (measured per pixel x pixels)")
-    ax.set(xlabel="pixels (7 angles each)", ylabel="time [s]", title="least squares of (n, kappa), sigma known")
+    ax.loglog(
+        npx, [t_pix * p for p in npx], "s--", label="per-pixel scipy (measured per pixel x pixels)"
+    )
+    ax.set(
+        xlabel="pixels (7 angles each)",
+        ylabel="time [s]",
+        title="least squares of (n, kappa), sigma known",
+    )
     ax.legend(fontsize=8)
     ctx.save_figure(fig, "perf_inversion")
     m = ctx.metrics
-    ctx.say(f"{shape[0]} x {shape[1]} x 7 image: batched {m['batched_s']:.1f} s ({m['batched_us_per_pixel']:.0f} us/pixel) "
-            f"against {m['per_pixel_us_per_pixel']:.0f} us/pixel for per-pixel scipy, a speed-up of {m['speedup']:.0f}x "
-            f"(goal 50x). On the {subset} compared pixels {m['equal_cost_fraction']:.0%} reach the same cost (to 1e-9), "
-            f"parameters there agreeing to {m['max_param_difference_equal_cost']:.1e}; the batched fit is lower in "
-            f"{m['batched_lower_cost_fraction']:.0%}. With sigma fitted (11 geometries) the speed-up is "
-            f"{m['sigma_fitted']['speedup']:.0f}x.")
+    ctx.say(
+        f"{shape[0]} x {shape[1]} x 7 image: batched {m['batched_s']:.1f} s ({m['batched_us_per_pixel']:.0f} us/pixel) "
+        f"against {m['per_pixel_us_per_pixel']:.0f} us/pixel for per-pixel scipy, a speed-up of {m['speedup']:.0f}x "
+        f"(goal 50x). On the {subset} compared pixels {m['equal_cost_fraction']:.0%} reach the same cost (to 1e-9), "
+        f"parameters there agreeing to {m['max_param_difference_equal_cost']:.1e}; the batched fit is lower in "
+        f"{m['batched_lower_cost_fraction']:.0%}. With sigma fitted (11 geometries) the speed-up is "
+        f"{m['sigma_fitted']['speedup']:.0f}x."
+    )

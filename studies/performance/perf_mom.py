@@ -7,13 +7,25 @@ import warnings
 import numpy as np
 from scipy import linalg
 
-from scatterlab.mom import (PlaneWave, TaperedWave, contour, correlation_length_for_slope,
-                            cylinder_echo_width, forward_backward, impedance_matrix, incoherent_scattering,
-                            rough_surface, solve_tm)
+from scatterlab.mom import (
+    PlaneWave,
+    TaperedWave,
+    contour,
+    correlation_length_for_slope,
+    cylinder_echo_width,
+    forward_backward,
+    impedance_matrix,
+    incoherent_scattering,
+    rough_surface,
+    solve_tm,
+)
 from scatterlab.plotting import headless_pyplot as plt
 
-STUDY = {"id": "perf_mom", "title": "Method of moments: error vs run time, LU vs forward-backward, fill vs solve",
-         "reproduces": "own performance study (issue 4, item 8)"}
+STUDY = {
+    "id": "perf_mom",
+    "title": "Method of moments: error vs run time, LU vs forward-backward, fill vs solve",
+    "reproduces": "own performance study (issue 4, item 8)",
+}
 
 K = 2 * np.pi
 
@@ -28,7 +40,7 @@ def run(ctx):
     exact = cylinder_echo_width(20, phi)
     rows = []
     with ctx.step("cylinder"):
-        for ppw in ((5, 10, 20) if ctx.quick else (5, 7, 10, 14, 20, 28, 40, 56)):
+        for ppw in (5, 10, 20) if ctx.quick else (5, 7, 10, 14, 20, 28, 40, 56):
             a = 20 / K
             n = int(np.ceil(2 * np.pi * a * ppw))
             t = 2 * np.pi * (np.arange(n) + 0.5) / n
@@ -37,12 +49,21 @@ def run(ctx):
                 warnings.simplefilter("ignore", UserWarning)
                 sol = solve_tm(a * np.cos(t), a * np.sin(t), 1.0, PlaneWave(np.pi / 2), closed=True)
             ew = sol.echo_width(np.pi / 2 - phi)
-            rows.append({"ppw": ppw, "seconds": time.perf_counter() - t0,
-                         "error": float(np.linalg.norm(ew - exact) / np.linalg.norm(exact))})
+            rows.append(
+                {
+                    "ppw": ppw,
+                    "seconds": time.perf_counter() - t0,
+                    "error": float(np.linalg.norm(ew - exact) / np.linalg.norm(exact)),
+                }
+            )
     axes[0].loglog([r["seconds"] for r in rows], [r["error"] for r in rows], "o-")
     for r in rows:
         axes[0].annotate(str(r["ppw"]), (r["seconds"], r["error"]), fontsize=7)
-    axes[0].set(xlabel="run time [s]", ylabel="relative L2 error", title="cylinder ka = 20 (labels: points/wavelength)")
+    axes[0].set(
+        xlabel="run time [s]",
+        ylabel="relative L2 error",
+        title="cylinder ka = 20 (labels: points/wavelength)",
+    )
     ctx.metrics["cylinder"] = rows
 
     # (b) partitions vs Monte-Carlo error (relative standard error in the lobe at 45 deg) vs time
@@ -51,8 +72,9 @@ def run(ctx):
     ts = np.radians(np.linspace(-89, 89, 179))
     with ctx.step("partitions"):
         t0 = time.perf_counter()
-        res = incoherent_scattering(x, y, 1.0, np.radians([10, 30, 45, 60, 75]), ts, partitions=P,
-                                    executor=ctx.executor)
+        res = incoherent_scattering(
+            x, y, 1.0, np.radians([10, 30, 45, 60, 75]), ts, partitions=P, executor=ctx.executor
+        )
         per_partition = (time.perf_counter() - t0) / P
     counts = [p for p in (2, 4, 8, 16, 32, 64, 100) if p <= P]
     mc = []
@@ -63,11 +85,18 @@ def run(ctx):
         se = float(np.mean(res.stderr[2, lobe] * np.sqrt(P / p) / res.mean[2, lobe]))
         mc.append({"partitions": p, "relative_stderr": se, "seconds": p * per_partition})
     axes[1].loglog([r["seconds"] for r in mc], [r["relative_stderr"] for r in mc], "o-")
-    axes[1].set(xlabel="run time [s]", ylabel="relative standard error in the 45-deg lobe",
-                title="partitions of 150 wavelengths (5 angles each)")
-    ctx.metrics["partitions"] = {"per_partition_seconds": per_partition, "sweep": mc,
-                                 "fill_seconds_total": res.seconds_fill, "solve_seconds_total": res.seconds_solve,
-                                 "full_fig39_estimate_seconds": 100 * per_partition}
+    axes[1].set(
+        xlabel="run time [s]",
+        ylabel="relative standard error in the 45-deg lobe",
+        title="partitions of 150 wavelengths (5 angles each)",
+    )
+    ctx.metrics["partitions"] = {
+        "per_partition_seconds": per_partition,
+        "sweep": mc,
+        "fill_seconds_total": res.seconds_fill,
+        "solve_seconds_total": res.seconds_solve,
+        "full_fig39_estimate_seconds": 100 * per_partition,
+    }
 
     # (c) LU vs forward-backward against unknowns
     sizes = (500, 1000, 2000) if ctx.quick else (1000, 2000, 4000, 8000, 12000, 20000)
@@ -85,18 +114,32 @@ def run(ctx):
             t0 = time.perf_counter()
             U_fb, info = forward_backward(A, V, tol=1e-6)
             t_fb = time.perf_counter() - t0
-            row = {"unknowns": n, "fill_s": t_fill, "fb_s": t_fb, "fb_iterations": info["iterations"],
-                   "fb_residual": info["residual"]}
+            row = {
+                "unknowns": n,
+                "fill_s": t_fill,
+                "fb_s": t_fb,
+                "fb_iterations": info["iterations"],
+                "fb_residual": info["residual"],
+            }
             if n <= lu_max:
                 t0 = time.perf_counter()
-                U_lu = linalg.lu_solve(linalg.lu_factor(A, check_finite=False), V, check_finite=False)
+                U_lu = linalg.lu_solve(
+                    linalg.lu_factor(A, check_finite=False), V, check_finite=False
+                )
                 row["lu_s"] = time.perf_counter() - t0
-                row["fb_vs_lu_relative_difference"] = float(np.linalg.norm(U_fb - U_lu) / np.linalg.norm(U_lu))
+                row["fb_vs_lu_relative_difference"] = float(
+                    np.linalg.norm(U_fb - U_lu) / np.linalg.norm(U_lu)
+                )
             cmp.append(row)
             del A
     ns = [r["unknowns"] for r in cmp]
     axes[2].loglog(ns, [r["fb_s"] for r in cmp], "o-", label="forward-backward (to 1e-6)")
-    axes[2].loglog([r["unknowns"] for r in cmp if "lu_s" in r], [r["lu_s"] for r in cmp if "lu_s" in r], "s-", label="LU")
+    axes[2].loglog(
+        [r["unknowns"] for r in cmp if "lu_s" in r],
+        [r["lu_s"] for r in cmp if "lu_s" in r],
+        "s-",
+        label="LU",
+    )
     axes[2].loglog(ns, [r["fill_s"] for r in cmp], "^--", label="matrix fill")
     axes[2].set(xlabel="unknowns", ylabel="time [s]", title="solvers")
     axes[2].legend(fontsize=8)
@@ -106,20 +149,28 @@ def run(ctx):
     # (d) fill + solve per partition against LU alone at N = 1500, five incidences
     xs, ys = rough_surface(150.0, 0.1, 1.0, correlation_length_for_slope(1.0, 0.3), rng)
     with ctx.step("fill_vs_solve"):
-        sol = solve_tm(xs, ys, 1.0, [TaperedWave(t, 37.5) for t in np.radians([10, 30, 45, 60, 75])])
+        sol = solve_tm(
+            xs, ys, 1.0, [TaperedWave(t, 37.5) for t in np.radians([10, 30, 45, 60, 75])]
+        )
         A = impedance_matrix(sol.contour, K)
         t0 = time.perf_counter()
         linalg.lu_factor(A, check_finite=False)
         t_lu = time.perf_counter() - t0
-    split = {"fill_s": sol.timings["fill"], "solve_s": sol.timings["solve"], "lu_alone_s": t_lu,
-             "fill_plus_solve_over_lu": (sol.timings["fill"] + sol.timings["solve"]) / t_lu}
+    split = {
+        "fill_s": sol.timings["fill"],
+        "solve_s": sol.timings["solve"],
+        "lu_alone_s": t_lu,
+        "fill_plus_solve_over_lu": (sol.timings["fill"] + sol.timings["solve"]) / t_lu,
+    }
     ctx.metrics["fill_vs_solve_1500"] = split
     cross = next((r["unknowns"] for r in cmp if "lu_s" in r and r["fb_s"] < r["lu_s"]), None)
-    ctx.say(f"Cylinder ka = 20: {rows[1]['error']:.1e} error at 10 points per wavelength in {rows[1]['seconds']:.2f} s. "
-            f"One 150-wavelength partition (1500 unknowns, five incidences) takes {per_partition:.2f} s, so the "
-            f"full Fig. 39 (100 partitions) needs about {100 * per_partition:.0f} s serially (goal 180 s). At 1500 "
-            f"unknowns fill + solve is {split['fill_plus_solve_over_lu']:.2f}x the LU factorisation alone (goal 1.5x; "
-            f"fill {split['fill_s']:.2f} s, LU {t_lu:.2f} s). Forward-backward is faster than LU from "
-            f"{cross if cross else 'no size measured here'} unknowns, agreeing to "
-            f"{max((r.get('fb_vs_lu_relative_difference', 0) for r in cmp)):.1e}; it reaches "
-            f"{cmp[-1]['unknowns']} unknowns in {cmp[-1]['fb_s']:.1f} s after a {cmp[-1]['fill_s']:.1f} s fill.")
+    ctx.say(
+        f"Cylinder ka = 20: {rows[1]['error']:.1e} error at 10 points per wavelength in {rows[1]['seconds']:.2f} s. "
+        f"One 150-wavelength partition (1500 unknowns, five incidences) takes {per_partition:.2f} s, so the "
+        f"full Fig. 39 (100 partitions) needs about {100 * per_partition:.0f} s serially (goal 180 s). At 1500 "
+        f"unknowns fill + solve is {split['fill_plus_solve_over_lu']:.2f}x the LU factorisation alone (goal 1.5x; "
+        f"fill {split['fill_s']:.2f} s, LU {t_lu:.2f} s). Forward-backward is faster than LU from "
+        f"{cross if cross else 'no size measured here'} unknowns, agreeing to "
+        f"{max((r.get('fb_vs_lu_relative_difference', 0) for r in cmp)):.1e}; it reaches "
+        f"{cmp[-1]['unknowns']} unknowns in {cmp[-1]['fb_s']:.1f} s after a {cmp[-1]['fill_s']:.1f} s fill."
+    )

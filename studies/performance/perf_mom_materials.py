@@ -15,7 +15,6 @@ import time
 import warnings
 
 import numpy as np
-
 from scatterlab.studies._common import plt
 
 from scatterlab.mom import (

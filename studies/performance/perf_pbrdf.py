@@ -12,8 +12,11 @@ from scatterlab.pbrdf import Model
 from scatterlab.plotting import headless_pyplot as plt
 from scatterlab.runtime import best_time
 
-STUDY = {"id": "perf_pbrdf", "title": "pBRDF throughput against pySCATMECH",
-         "reproduces": "own benchmark (issue 3, item 10)"}
+STUDY = {
+    "id": "perf_pbrdf",
+    "title": "pBRDF throughput against pySCATMECH",
+    "reproduces": "own benchmark (issue 3, item 10)",
+}
 
 
 def run(ctx):
@@ -43,13 +46,20 @@ def run(ctx):
         ctx.say("pySCATMECH is not installed (test extra): only our throughput is reported.")
         peer_rate = None
     else:
-        peer = BRDF_Model("Shadowed_Facet_BRDF_Model", substrate=complex(eta.real, -eta.imag),
-                          sdf="Gaussian_Slope_Distribution_Function", shadow="Torrance_Sparrow_Shadow_Function")
+        peer = BRDF_Model(
+            "Shadowed_Facet_BRDF_Model",
+            substrate=complex(eta.real, -eta.imag),
+            sdf="Gaussian_Slope_Distribution_Function",
+            shadow="Torrance_Sparrow_Shadow_Function",
+        )
         peer.setParameter("sdf.s", s_peer)
         D = np.diag([1.0, 1, -1, 1])
 
         def peer_all():
-            return [peer.MuellerBRDF(a, b, np.pi - c) for a, b, c in zip(ti[:n_peer], tr[:n_peer], ph[:n_peer])]
+            return [
+                peer.MuellerBRDF(a, b, np.pi - c)
+                for a, b, c in zip(ti[:n_peer], tr[:n_peer], ph[:n_peer])
+            ]
 
         with ctx.step("peer"):
             peer_rate = n_peer / best_time(peer_all, repeat=3)
@@ -74,15 +84,25 @@ def run(ctx):
     ax.set_ylabel("evaluations / s")
     ax.legend(fontsize=7)
     ctx.save_figure(fig, "perf_pbrdf")
-    text = "Evaluations per second at {:.0e} geometries: ".format(n) + ", ".join(
-        f"{k} {v:.2g}" for k, v in ours.items()) + "."
+    text = (
+        "Evaluations per second at {:.0e} geometries: ".format(n)
+        + ", ".join(f"{k} {v:.2g}" for k, v in ours.items())
+        + "."
+    )
     if peer_rate:
-        text += (f" pySCATMECH: {peer_rate:.2g} Mueller matrices per second (per-call interface), at a maximum "
-                 f"difference of {ctx.metrics['max_difference_relative_to_m00']:.1e} of m00. Ratios: " + ", ".join(
-                     f"{k} x{ours[k] / peer_rate:.1f}" for k in ours) + ".")
+        text += (
+            f" pySCATMECH: {peer_rate:.2g} Mueller matrices per second (per-call interface), at a maximum "
+            f"difference of {ctx.metrics['max_difference_relative_to_m00']:.1e} of m00. Ratios: "
+            + ", ".join(f"{k} x{ours[k] / peer_rate:.1f}" for k in ours)
+            + "."
+        )
         short = [k for k in ours if ours[k] / peer_rate < 20]
         if short:
-            text += (" Below the 20x goal: " + ", ".join(short) + " -- the numpy implementation is bound by "
-                     "memory passes over ~100 temporaries per element; a compiled kernel would be needed to go "
-                     "further.")
+            text += (
+                " Below the 20x goal: "
+                + ", ".join(short)
+                + " -- the numpy implementation is bound by "
+                "memory passes over ~100 temporaries per element; a compiled kernel would be needed to go "
+                "further."
+            )
     ctx.say(text)

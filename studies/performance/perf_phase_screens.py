@@ -7,8 +7,11 @@ from scatterlab.imaging import turbulence as T
 from scatterlab.plotting import headless_pyplot as plt
 from scatterlab.runtime import best_time
 
-STUDY = {"id": "perf_phase_screens", "title": "Phase screens: accuracy vs time; speed vs AOtools",
-         "reproduces": "own performance study (issue 7, items 6 and 8)"}
+STUDY = {
+    "id": "perf_phase_screens",
+    "title": "Phase screens: accuracy vs time; speed vs AOtools",
+    "reproduces": "own performance study (issue 7, items 6 and 8)",
+}
 
 
 def run(ctx):
@@ -28,7 +31,11 @@ def run(ctx):
                 t = best_time(lambda: T.phase_screen(n, dx, r0, ctx.rng, **kw), repeat=5)
                 s = np.stack([T.phase_screen(n, dx, r0, ctx.rng, **kw) for _ in range(count)])
                 r, D = T.structure_function(s, n // 2)
-                err = float(np.max(np.abs(D[1:] / (T.STRUCTURE_CONSTANT * (r[1:] * dx / r0) ** (5 / 3)) - 1)))
+                err = float(
+                    np.max(
+                        np.abs(D[1:] / (T.STRUCTURE_CONSTANT * (r[1:] * dx / r0) ** (5 / 3)) - 1)
+                    )
+                )
             finally:
                 T.SUBHARMONIC_LEVELS = old
             rows.append({"levels": levels, "max_rel_error_2px_to_half": err, "time_s": t})
@@ -36,18 +43,25 @@ def run(ctx):
             ax.annotate(f"{levels} levels", (t, err), fontsize=7)
     sizes = []
     with ctx.step("sizes"):
-        for n in ((32, 64, 128) if ctx.quick else (32, 64, 128, 256)):
+        for n in (32, 64, 128) if ctx.quick else (32, 64, 128, 256):
             T.phase_screen(n, dx, r0, 0)
             t = best_time(lambda: T.phase_screen(n, dx, r0, ctx.rng), repeat=5)
-            s = np.stack([T.phase_screen(n, dx, r0, ctx.rng) for _ in range(max(50, count * 64 // n))])
+            s = np.stack(
+                [T.phase_screen(n, dx, r0, ctx.rng) for _ in range(max(50, count * 64 // n))]
+            )
             r, D = T.structure_function(s, n // 2)
-            err = float(np.max(np.abs(D[1:] / (T.STRUCTURE_CONSTANT * (r[1:] * dx / r0) ** (5 / 3)) - 1)))
+            err = float(
+                np.max(np.abs(D[1:] / (T.STRUCTURE_CONSTANT * (r[1:] * dx / r0) ** (5 / 3)) - 1))
+            )
             sizes.append({"n": n, "max_rel_error_2px_to_half": err, "time_s": t})
             ax.loglog(t, err, "s", color="C3")
             ax.annotate(f"{n} px", (t, err), fontsize=7, color="C3")
     ctx.metrics["sizes"] = sizes
-    ax.set(xlabel="time per screen [s]", ylabel="max |D/theory - 1|, 2 px to D/2",
-           title="subharmonic levels (64 px) and screen sizes")
+    ax.set(
+        xlabel="time per screen [s]",
+        ylabel="max |D/theory - 1|, 2 px to D/2",
+        title="subharmonic levels (64 px) and screen sizes",
+    )
     ctx.save_figure(fig, "perf_phase_screens")
     speed = {}
     try:
@@ -64,15 +78,33 @@ def run(ctx):
                 entry.update(peer_s=peer, speedup=peer / ours)
             speed[n] = entry
     ctx.metrics.update({"levels": rows, "speed": speed})
-    ctx.say("Accuracy against time (64 px, " + f"{count} screens): " + ", ".join(
-        f"{r['levels']} levels: max error {r['max_rel_error_2px_to_half']:.3f} in {r['time_s'] * 1e3:.1f} ms"
-        for r in rows) + " (the error includes the statistical error of the estimate, a few per cent). "
-        "Screen sizes (default levels): " + ", ".join(
-        f"{s['n']} px: {s['max_rel_error_2px_to_half']:.3f} in {s['time_s'] * 1e3:.1f} ms" for s in sizes) + ".")
+    ctx.say(
+        "Accuracy against time (64 px, "
+        + f"{count} screens): "
+        + ", ".join(
+            f"{r['levels']} levels: max error {r['max_rel_error_2px_to_half']:.3f} in {r['time_s'] * 1e3:.1f} ms"
+            for r in rows
+        )
+        + " (the error includes the statistical error of the estimate, a few per cent). "
+        "Screen sizes (default levels): "
+        + ", ".join(
+            f"{s['n']} px: {s['max_rel_error_2px_to_half']:.3f} in {s['time_s'] * 1e3:.1f} ms"
+            for s in sizes
+        )
+        + "."
+    )
     if all("speedup" in v for v in speed.values()):
-        ctx.say("Speed against AOtools' ft_sh_phase_screen (same run): " + ", ".join(
-            f"{n} px: {v['ours_s'] * 1e3:.1f} ms vs {v['peer_s'] * 1e3:.1f} ms (x{v['speedup']:.1f})"
-            for n, v in speed.items()) + ".")
+        ctx.say(
+            "Speed against AOtools' ft_sh_phase_screen (same run): "
+            + ", ".join(
+                f"{n} px: {v['ours_s'] * 1e3:.1f} ms vs {v['peer_s'] * 1e3:.1f} ms (x{v['speedup']:.1f})"
+                for n, v in speed.items()
+            )
+            + "."
+        )
     else:
-        ctx.say("AOtools is not installed: speeds are ours only: " + ", ".join(
-            f"{n} px: {v['ours_s'] * 1e3:.1f} ms" for n, v in speed.items()) + ".")
+        ctx.say(
+            "AOtools is not installed: speeds are ours only: "
+            + ", ".join(f"{n} px: {v['ours_s'] * 1e3:.1f} ms" for n, v in speed.items())
+            + "."
+        )

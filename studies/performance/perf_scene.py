@@ -1,13 +1,25 @@
 """Time to simulate a whole 4-channel 512 x 512 polarimetric scene (render, PSF from a fresh phase screen,
 channels, noise, Stokes estimate) on this machine; goal: under a second (issue 7, item 8)."""
 
-from scatterlab.imaging import (ANGLES_0_45_90_135, channel_images, circular_pupil, detect, painted_plate,
-                                phase_screen, psf, render_stokes, stokes_from_channels)
+from scatterlab.imaging import (
+    ANGLES_0_45_90_135,
+    channel_images,
+    circular_pupil,
+    detect,
+    painted_plate,
+    phase_screen,
+    psf,
+    render_stokes,
+    stokes_from_channels,
+)
 from scatterlab.plotting import headless_pyplot as plt
 from scatterlab.runtime import Stopwatch, best_time
 
-STUDY = {"id": "perf_scene", "title": "Whole 4-channel 512 x 512 scene simulation time",
-         "reproduces": "own performance study (issue 7, item 8)"}
+STUDY = {
+    "id": "perf_scene",
+    "title": "Whole 4-channel 512 x 512 scene simulation time",
+    "reproduces": "own performance study (issue 7, item 8)",
+}
 
 
 def run(ctx):
@@ -41,5 +53,8 @@ def run(ctx):
     ax.set_ylabel("time [s]")
     ax.set_title(f"{size} x {size}, 4 channels: {total:.2f} s")
     ctx.save_figure(fig, "perf_scene")
-    ctx.say(f"A whole 4-channel {size} x {size} scene takes {total:.2f} s (best of 5; goal < 1 s at 512): "
-            + ", ".join(f"{k} {v * 1e3:.0f} ms" for k, v in sw.times.items()) + ".")
+    ctx.say(
+        f"A whole 4-channel {size} x {size} scene takes {total:.2f} s (best of 5; goal < 1 s at 512): "
+        + ", ".join(f"{k} {v * 1e3:.0f} ms" for k, v in sw.times.items())
+        + "."
+    )

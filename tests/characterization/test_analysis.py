@@ -14,14 +14,20 @@ from scatterlab.cli import main
 EXAMPLES = Path(__file__).resolve().parents[2] / "data" / "examples"
 FAST = AnalyzeSettings(iterations=4, posterior_steps=200)
 
-pytestmark = pytest.mark.skipif(not EXAMPLES.is_dir(), reason="data/examples not present (installed package)")
+pytestmark = pytest.mark.skipif(
+    not EXAMPLES.is_dir(), reason="data/examples not present (installed package)"
+)
 
 
 @pytest.mark.parametrize("name", ["painted_plate.h5", "painted_plate_dofp.tif"])
 def test_analyze_runs_on_the_example_datasets(tmp_path, name):
     report = analyze(EXAMPLES / name, tmp_path / "a", settings=FAST)
     text = report.read_text()
-    assert "Simulated data" in text and "covered 68 / 95 %" in text and (tmp_path / "a" / "maps.png").exists()
+    assert (
+        "Simulated data" in text
+        and "covered 68 / 95 %" in text
+        and (tmp_path / "a" / "maps.png").exists()
+    )
     s = json.loads((tmp_path / "a" / "summary.json").read_text())
     assert s["posteriors"] and len(s["posteriors"]) + len(s["regions_left_out"]) == 2
     for region, p in s["posteriors"].items():
@@ -32,14 +38,28 @@ def test_analyze_runs_on_the_example_datasets(tmp_path, name):
 
 def test_analyze_cli_reads_a_tiff_stack_with_its_sidecar_and_names_wrong_files(tmp_path, capsys):
     args = ["--iterations", "4", "--posterior-steps", "200"]
-    assert main(["analyze", str(EXAMPLES / "painted_plate.tif"), "--out", str(tmp_path / "t"), *args]) == 0
+    assert (
+        main(["analyze", str(EXAMPLES / "painted_plate.tif"), "--out", str(tmp_path / "t"), *args])
+        == 0
+    )
     assert (tmp_path / "t" / "report.md").exists()
     scene = tmp_path / "scene.toml"
     scene.write_text("image_size = 64\n")
     assert main(["analyze", str(scene), "--out", str(tmp_path / "b")]) == 2
     assert "expected a dataset" in capsys.readouterr().err
-    assert main(["analyze", str(EXAMPLES / "painted_plate.h5"), "--out", str(tmp_path / "c"),
-                 "--iterations", "0"]) == 2
+    assert (
+        main(
+            [
+                "analyze",
+                str(EXAMPLES / "painted_plate.h5"),
+                "--out",
+                str(tmp_path / "c"),
+                "--iterations",
+                "0",
+            ]
+        )
+        == 2
+    )
     assert "iterations" in capsys.readouterr().err
 
 
@@ -55,13 +75,31 @@ def test_analyze_with_the_known_diffraction_psf_recovers_the_paint(tmp_path):
     labels = plate_labels(cfg, rng)
     thetas = np.radians([30.0, 40.0, 50.0, 60.0])
     acqs = [acquire(Plate(), labels, th, "no_turbulence", None, cfg, rng) for th in thetas]
-    truth = Truth(labels, ["paint", "metal", "scratch"], np.array([1.39, 1.44, 1.44]), np.array([0.34, 16, 16]),
-                  np.full(3, 0.3), s0=np.stack([a.truth_s0 for a in acqs]),
-                  dolp=np.stack([a.truth_dolp for a in acqs]))
-    ds = PolarimetricDataset(np.stack([a.counts for a in acqs]), acqs[0].angles, thetas, 1.55e-6,
-                             Optics(pixels_per_lambda_over_d=2.0), read_noise=10.0, truth=truth,
-                             title="diffraction-limited plate", simulated=True)
-    analyze(ds, tmp_path, settings=AnalyzeSettings(psf="diffraction", iterations=100, posterior_steps=600))
+    truth = Truth(
+        labels,
+        ["paint", "metal", "scratch"],
+        np.array([1.39, 1.44, 1.44]),
+        np.array([0.34, 16, 16]),
+        np.full(3, 0.3),
+        s0=np.stack([a.truth_s0 for a in acqs]),
+        dolp=np.stack([a.truth_dolp for a in acqs]),
+    )
+    ds = PolarimetricDataset(
+        np.stack([a.counts for a in acqs]),
+        acqs[0].angles,
+        thetas,
+        1.55e-6,
+        Optics(pixels_per_lambda_over_d=2.0),
+        read_noise=10.0,
+        truth=truth,
+        title="diffraction-limited plate",
+        simulated=True,
+    )
+    analyze(
+        ds,
+        tmp_path,
+        settings=AnalyzeSettings(psf="diffraction", iterations=100, posterior_steps=600),
+    )
     p = json.loads((tmp_path / "summary.json").read_text())["posteriors"]["dielectric"]
     assert p["n"]["covers95"] and p["kappa"]["covers95"], p
     assert abs(p["n"]["median"] - 1.39) < 0.05 and abs(p["kappa"]["median"] - 0.34) < 0.1, p

@@ -11,8 +11,15 @@ from scatterlab.characterization.scene_config import Plate
 
 
 def tiny(**kw):
-    cfg = SceneConfig(image_size=32, geometry_deg=[35, 55], d_over_r0=[7.9], iterations=5, posterior_steps=300,
-                      plates=[Plate()], **kw)
+    cfg = SceneConfig(
+        image_size=32,
+        geometry_deg=[35, 55],
+        d_over_r0=[7.9],
+        iterations=5,
+        posterior_steps=300,
+        plates=[Plate()],
+        **kw,
+    )
     return cfg.validate()
 
 
@@ -24,15 +31,25 @@ def test_pipeline_writes_results_and_report(tmp_path):
     assert "aluminium plate" in text and "DOLP RMSE" in text and "Table 5" in text
     with h5py.File(tmp_path / "results.h5") as f:
         g = f["aluminium/theta_35/D_r0_7.9"]
-        assert g["dolp_corrected"].shape == (32, 32) and "classes_corrected" in g and "psf_corrected" in g
-        assert "dolp_corrected" not in f["aluminium/theta_35/no_turbulence"]  # the reference is not deconvolved
+        assert (
+            g["dolp_corrected"].shape == (32, 32)
+            and "classes_corrected" in g
+            and "psf_corrected" in g
+        )
+        assert (
+            "dolp_corrected" not in f["aluminium/theta_35/no_turbulence"]
+        )  # the reference is not deconvolved
         assert f["aluminium/D_r0_7.9_corrected/n"].shape == (32, 32)
         assert f["aluminium/D_r0_7.9_corrected/posterior_paint/chain"].shape[-1] == 3
         L = g["loglik_corrected"][()]
         assert np.all(np.diff(L) >= -1e-9 * np.abs(L[1:]))
     s = json.loads((tmp_path / "summary.json").read_text())
-    assert set(s["plates"]["aluminium"]) == {"no_turbulence", "no_turbulence_unrestored", "D_r0_7.9_degraded",
-                                             "D_r0_7.9_corrected"}
+    assert set(s["plates"]["aluminium"]) == {
+        "no_turbulence",
+        "no_turbulence_unrestored",
+        "D_r0_7.9_degraded",
+        "D_r0_7.9_corrected",
+    }
     post = s["plates"]["aluminium"]["no_turbulence"]["posterior_paint"]
     for q in ("n", "kappa"):  # the truth beside every estimate, and whether each interval covers it
         e = post[q]
@@ -56,7 +73,9 @@ def test_only_requested_estimates_are_computed(tmp_path):
 
 def test_scene_files_are_validated(tmp_path):
     p = tmp_path / "scene.toml"
-    p.write_text('image_size = 32\ngeometry_deg = [40, 50]\n[[plates]]\nmetal = "steel"\nmetal_n = 3.6\n')
+    p.write_text(
+        'image_size = 32\ngeometry_deg = [40, 50]\n[[plates]]\nmetal = "steel"\nmetal_n = 3.6\n'
+    )
     cfg = load_scene(p)
     assert cfg.plates[0].metal == "steel" and cfg.image_size == 32
     p.write_text("image_sise = 32\n")
@@ -68,8 +87,11 @@ def test_scene_files_are_validated(tmp_path):
     p.write_text('priors = "ch9"\n')
     with pytest.raises(ValueError, match="priors"):
         load_scene(p)
-    for bad, name in (("wavelength_um = -1.55", "wavelength_um"), ('psf_model = "gauss"', "psf_model"),
-                      ("iterations = 0", "iterations")):
+    for bad, name in (
+        ("wavelength_um = -1.55", "wavelength_um"),
+        ('psf_model = "gauss"', "psf_model"),
+        ("iterations = 0", "iterations"),
+    ):
         p.write_text(bad + "\n")
         with pytest.raises(ValueError, match=name):
             load_scene(p)
@@ -78,8 +100,13 @@ def test_scene_files_are_validated(tmp_path):
 def test_keystone_registration_recovers_object_coordinates_and_shifts():
     """Foreshortening by cos(theta) and its inverse stretch bring a label map back (up to the half-pixel
     rounding of nearest-neighbour sampling); phase correlation finds a sub-pixel translation."""
-    from scatterlab.characterization.registration import (apply_shift, estimate_shift, foreshorten,
-                                                         keystone_correct, register)
+    from scatterlab.characterization.registration import (
+        apply_shift,
+        estimate_shift,
+        foreshorten,
+        keystone_correct,
+        register,
+    )
     from scatterlab.imaging import painted_plate
 
     labels = painted_plate(128, scratches=0).labels
@@ -91,11 +118,21 @@ def test_keystone_registration_recovers_object_coordinates_and_shifts():
         back = np.rint(keystone_correct(cam.astype(float), th, order=0)).astype(int)
         assert np.mean(back != labels) < 0.03
     rng = np.random.default_rng(0)
-    img = np.fft.irfft2(np.fft.rfft2(rng.random((64, 64))) * np.exp(-0.02 * np.add.outer(
-        np.fft.fftfreq(64) ** 2 * 4096, np.fft.rfftfreq(64) ** 2 * 4096)), s=(64, 64))
+    img = np.fft.irfft2(
+        np.fft.rfft2(rng.random((64, 64)))
+        * np.exp(
+            -0.02 * np.add.outer(np.fft.fftfreq(64) ** 2 * 4096, np.fft.rfftfreq(64) ** 2 * 4096)
+        ),
+        s=(64, 64),
+    )
     true = np.array([3.3, -5.6])
-    moved = np.fft.irfft2(np.fft.rfft2(img) * np.exp(-2j * np.pi * np.add.outer(
-        np.fft.fftfreq(64) * true[0], np.fft.rfftfreq(64) * true[1])), s=(64, 64))
+    moved = np.fft.irfft2(
+        np.fft.rfft2(img)
+        * np.exp(
+            -2j * np.pi * np.add.outer(np.fft.fftfreq(64) * true[0], np.fft.rfftfreq(64) * true[1])
+        ),
+        s=(64, 64),
+    )
     est = estimate_shift(img, moved)
     np.testing.assert_allclose(est, -true, atol=0.15)
     aligned = apply_shift(moved, est)

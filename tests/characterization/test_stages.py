@@ -15,8 +15,15 @@ from scatterlab.inversion import fit_dolp
 
 
 def small(**kw):
-    base = dict(image_size=64, geometry_deg=[30, 45, 60], d_over_r0=[7.9], iterations=10, posterior_steps=300,
-                plates=[Plate()], estimate=["n_kappa"])
+    base = dict(
+        image_size=64,
+        geometry_deg=[30, 45, 60],
+        d_over_r0=[7.9],
+        iterations=10,
+        posterior_steps=300,
+        plates=[Plate()],
+        estimate=["n_kappa"],
+    )
     base.update(kw)
     return SceneConfig(**base).validate()
 
@@ -26,8 +33,11 @@ def region_fit(res, case, kind, region):
     th = np.array([o.theta for o in obs])
     stack = np.stack([o.images[(case, kind)].dolp for o in obs])
     sel = interior(res.labels.shape, 4)
-    truth = (res.plate.paint_n, res.plate.paint_kappa) if region == "paint" else (res.plate.metal_n,
-                                                                                  res.plate.metal_kappa)
+    truth = (
+        (res.plate.paint_n, res.plate.paint_kappa)
+        if region == "paint"
+        else (res.plate.metal_n, res.plate.metal_kappa)
+    )
     d = region_data(region, stack, res.labels, sel, default_margin(th.max()), th, truth)
     f = fit_dolp(d.mean, th, th, sigma=0.3)
     return float(f.n), float(f.kappa), d
@@ -37,8 +47,12 @@ def test_ideal_chain_returns_the_rendered_materials():
     """No noise, no blur, no foreshortening: the region-mean DOLP is the pBRDF's (Eq. 203) and the inversion
     recovers the paint's and the steel's indices (independent truth: the scene's own n - j kappa)."""
     cfg = small(plates=[Plate("steel", 3.60, 5.88)], d_over_r0=[])
-    res = run_plate(cfg.plates[0], cfg, np.random.default_rng(0),
-                    ideal=Ideal(noise=True, optics=True, foreshortening=True))
+    res = run_plate(
+        cfg.plates[0],
+        cfg,
+        np.random.default_rng(0),
+        ideal=Ideal(noise=True, optics=True, foreshortening=True),
+    )
     n, k, d = region_fit(res, "no_turbulence", "restored", "paint")
     assert abs(n - 1.39) < 0.01 and abs(k - 0.34) < 0.01
     n, k, _ = region_fit(res, "no_turbulence", "restored", "metal")
@@ -59,7 +73,12 @@ def test_known_psf_restoration_removes_the_halo_bias_of_the_paint():
 
 @pytest.fixture(scope="module")
 def uninterrupted(tmp_path_factory):
-    cfg = small(image_size=32, iterations=3, plates=[Plate(), Plate("steel", 3.60, 5.88)], estimate=["classes"])
+    cfg = small(
+        image_size=32,
+        iterations=3,
+        plates=[Plate(), Plate("steel", 3.60, 5.88)],
+        estimate=["classes"],
+    )
     out = tmp_path_factory.mktemp("whole")
     characterize(cfg, out)
     return cfg, json.loads((out / "summary.json").read_text())["plates"]
@@ -67,20 +86,28 @@ def uninterrupted(tmp_path_factory):
 
 # (module, function, which call dies): killed inside a deconvolution, while scoring the second plate, between
 # the two plates' figures, and after results.h5 is in place but before summary.json is written
-BOUNDARIES = [("restoration", "_em", 3), ("metrics", "score_plate", 2), ("report", "plate_figure", 2),
-              ("runtime_results", "write_json", 1)]
+BOUNDARIES = [
+    ("restoration", "_em", 3),
+    ("metrics", "score_plate", 2),
+    ("report", "plate_figure", 2),
+    ("runtime_results", "write_json", 1),
+]
 
 
 @pytest.mark.parametrize("module, name, call", BOUNDARIES)
-def test_a_run_killed_at_any_stage_finishes_on_a_plain_rerun(tmp_path, monkeypatch, uninterrupted, module,
-                                                             name, call):
+def test_a_run_killed_at_any_stage_finishes_on_a_plain_rerun(
+    tmp_path, monkeypatch, uninterrupted, module, name, call
+):
     """A run killed at a stage boundary finishes on a plain rerun (no --force), with the numbers of an
     uninterrupted run; a finished run is not overwritten silently."""
     import importlib
 
     cfg, whole = uninterrupted
-    mod = importlib.import_module({"runtime_results": "scatterlab.runtime.results"}.get(
-        module, f"scatterlab.characterization.{module}"))
+    mod = importlib.import_module(
+        {"runtime_results": "scatterlab.runtime.results"}.get(
+            module, f"scatterlab.characterization.{module}"
+        )
+    )
     original = getattr(mod, name)
     calls = {"n": 0}
 
@@ -102,23 +129,26 @@ def test_a_run_killed_at_any_stage_finishes_on_a_plain_rerun(tmp_path, monkeypat
         characterize(cfg, tmp_path / "killed")
 
 
-@pytest.mark.parametrize("text, key", [
-    ('[[plates]]\nmetal_nn = 1.4\n', "metal_nn"),
-    ('image_size = "big"\n', "image_size"),
-    ("image_size = 64.0\n", "image_size"),
-    ("image_size = 100000\n", "image_size"),
-    ("geometry_deg = 45\n", "geometry_deg"),
-    ("plates = []\n", "plates"),
-    ("photons = nan\n", "photons"),
-    ("photons = inf\n", "photons"),
-    ("d_over_r0 = [nan]\n", "d_over_r0"),
-    ("polarizer_deg = [0, 0, 0, 0]\n", "polarizer_deg"),
-    ("sigma_known = 0\n", "sigma_known"),
-    ("posterior_steps = -5\n", "posterior_steps"),
-    ('[[plates]]\nmetal_n = -1.0\n', "metal_n"),
-    ('[[plates]]\nmetal_roughness = 0.0\n', "metal_roughness"),
-    ('[[plates]]\nmetal_kappa = "x"\n', "metal_kappa"),
-])
+@pytest.mark.parametrize(
+    "text, key",
+    [
+        ("[[plates]]\nmetal_nn = 1.4\n", "metal_nn"),
+        ('image_size = "big"\n', "image_size"),
+        ("image_size = 64.0\n", "image_size"),
+        ("image_size = 100000\n", "image_size"),
+        ("geometry_deg = 45\n", "geometry_deg"),
+        ("plates = []\n", "plates"),
+        ("photons = nan\n", "photons"),
+        ("photons = inf\n", "photons"),
+        ("d_over_r0 = [nan]\n", "d_over_r0"),
+        ("polarizer_deg = [0, 0, 0, 0]\n", "polarizer_deg"),
+        ("sigma_known = 0\n", "sigma_known"),
+        ("posterior_steps = -5\n", "posterior_steps"),
+        ("[[plates]]\nmetal_n = -1.0\n", "metal_n"),
+        ("[[plates]]\nmetal_roughness = 0.0\n", "metal_roughness"),
+        ('[[plates]]\nmetal_kappa = "x"\n', "metal_kappa"),
+    ],
+)
 def test_scene_errors_name_the_key_before_anything_runs(tmp_path, text, key):
     p = tmp_path / "scene.toml"
     p.write_text(text)
@@ -148,8 +178,16 @@ def test_a_scene_that_is_not_the_default_gets_intervals_covering_its_truth():
     """Another metal (titanium 3.69 - j4.59), another paint (1.60 - j0.10), other geometries and sampling:
     without turbulence both regions' 95 % intervals cover the truth (issue: any painted-plate scene a user
     writes). The calibration over many seeds is studies/characterization_coverage.py."""
-    cfg = small(image_size=96, geometry_deg=[35, 45, 55, 65], d_over_r0=[], iterations=10, posterior_steps=800,
-                plates=[Plate("titanium", 3.69, 4.59, 1.60, 0.10)], estimate=["posterior"], seed=11)
+    cfg = small(
+        image_size=96,
+        geometry_deg=[35, 45, 55, 65],
+        d_over_r0=[],
+        iterations=10,
+        posterior_steps=800,
+        plates=[Plate("titanium", 3.69, 4.59, 1.60, 0.10)],
+        estimate=["posterior"],
+        seed=11,
+    )
     res = run_plate(cfg.plates[0], cfg, np.random.default_rng(cfg.seed))
     for region in ("paint", "titanium"):
         p = res.metrics["no_turbulence"][f"posterior_{region}"]

@@ -52,8 +52,15 @@ def test_n_kappa_from_corrected_dolp_beat_the_degraded_ones(tmp_path):
     handle on n (its errors are reported, not asserted)."""
     import json
 
-    cfg = SceneConfig(image_size=96, geometry_deg=[30, 40, 50, 60], d_over_r0=[7.9], iterations=120,
-                      estimate=["n_kappa"], plates=[Plate()], seed=5).validate()
+    cfg = SceneConfig(
+        image_size=96,
+        geometry_deg=[30, 40, 50, 60],
+        d_over_r0=[7.9],
+        iterations=120,
+        estimate=["n_kappa"],
+        plates=[Plate()],
+        seed=5,
+    ).validate()
     characterize(cfg, tmp_path)
     s = json.loads((tmp_path / "summary.json").read_text())["plates"]["aluminium"]
     deg, cor = s["D_r0_7.9_degraded"]["paint"], s["D_r0_7.9_corrected"]["paint"]

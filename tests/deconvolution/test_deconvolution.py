@@ -4,13 +4,21 @@ the degraded data, the MAP DOLP root against the companion matrix, classificatio
 import numpy as np
 import pytest
 
-from scatterlab.deconvolution import (PRIOR_SETS, SuperGaussianPrior, adaptive_priors, blind_deconvolve,
-                                      classification_errors, dolp_update, dolp_update_companion, evenly_spaced)
+from scatterlab.deconvolution import (
+    PRIOR_SETS,
+    SuperGaussianPrior,
+    adaptive_priors,
+    blind_deconvolve,
+    classification_errors,
+    dolp_update,
+    dolp_update_companion,
+    evenly_spaced,
+)
 from scatterlab.imaging import ANGLES_0_45_90_135, channel_images, detect
 
 
 def gaussian_psf(shape, sd):
-    yy, xx = np.mgrid[0:shape[0], 0:shape[1]]
+    yy, xx = np.mgrid[0 : shape[0], 0 : shape[1]]
     g = np.exp(-((yy - shape[0] // 2) ** 2 + (xx - shape[1] // 2) ** 2) / (2 * sd * sd))
     return g / g.sum()
 
@@ -37,7 +45,7 @@ def test_known_psf_object_update_equals_richardson_lucy_of_scikit_image():
     obj = np.zeros((n, n))
     obj[20:44, 20:44] = rng.uniform(1, 3, (24, 24))
     h = gaussian_psf((n, n), 1.5)
-    h[np.hypot(*np.mgrid[-n // 2:n // 2, -n // 2:n // 2]) > 6] = 0
+    h[np.hypot(*np.mgrid[-n // 2 : n // 2, -n // 2 : n // 2]) > 6] = 0
     h /= h.sum()
     from scatterlab.imaging import convolve
 
@@ -45,11 +53,24 @@ def test_known_psf_object_update_equals_richardson_lucy_of_scikit_image():
     # scikit-image convolves with zero padding; wrapping the image by more than the 15 x 2 x 6 pixels the
     # iterations can carry the border makes its centre the periodic problem
     big = np.pad(img, 192, mode="wrap")
-    ref = richardson_lucy(big, h[n // 2 - 6:n // 2 + 7, n // 2 - 6:n // 2 + 7], num_iter=15, clip=False,
-                          filter_epsilon=None)[192:-192, 192:-192]
+    ref = richardson_lucy(
+        big,
+        h[n // 2 - 6 : n // 2 + 7, n // 2 - 6 : n // 2 + 7],
+        num_iter=15,
+        clip=False,
+        filter_epsilon=None,
+    )[192:-192, 192:-192]
     # four identical unpolarized channels: i_n = h * S0/2, so S0/2 is the Richardson-Lucy estimate (start 0.5)
-    res = blind_deconvolve(np.stack([img] * 4), ANGLES_0_45_90_135, psf0=h, psf_mode="fixed", iterations=15,
-                           boundary="periodic", s0_start=1.0, dolp_start=0.0)
+    res = blind_deconvolve(
+        np.stack([img] * 4),
+        ANGLES_0_45_90_135,
+        psf0=h,
+        psf_mode="fixed",
+        iterations=15,
+        boundary="periodic",
+        s0_start=1.0,
+        dolp_start=0.0,
+    )
     np.testing.assert_allclose(res.s0[8:-8, 8:-8] / 2, ref[8:-8, 8:-8], rtol=1e-8, atol=1e-10)
 
 
@@ -79,8 +100,9 @@ def test_stokes_basis_updates_equal_the_per_channel_updates(aop, boundary):
     np.testing.assert_allclose(Qf, Qs, rtol=1e-10, atol=1e-12)
     w = ops.window_share(sf.Hf)
     np.testing.assert_allclose(fast.s0_denominator(w, P), slow.s0_denominator(w, P), rtol=1e-12)
-    np.testing.assert_allclose(fast.psf_correlation(sf, Rf)[0], slow.psf_correlation(ss, Rs).sum(0), rtol=1e-10,
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        fast.psf_correlation(sf, Rf)[0], slow.psf_correlation(ss, Rs).sum(0), rtol=1e-10, atol=1e-12
+    )
 
 
 def test_log_likelihood_never_decreases_and_deconvolution_beats_degraded_data():
@@ -111,7 +133,9 @@ def test_classification_with_chapter_v_priors_beats_the_degraded_dolp_threshold(
     rng = np.random.default_rng(2)
     h = gaussian_psf(S.shape[1:], 2.0)
     counts = detect(channel_images(S, ANGLES_0_45_90_135, h), rng, photons=5e3)
-    res = blind_deconvolve(counts, ANGLES_0_45_90_135, iterations=60, psf_radius=8, priors=PRIOR_SETS["ch5"])
+    res = blind_deconvolve(
+        counts, ANGLES_0_45_90_135, iterations=60, psf_radius=8, priors=PRIOR_SETS["ch5"]
+    )
     ours = classification_errors(res.classes, lab)
     from scatterlab.imaging import stokes_from_channels
 
@@ -135,20 +159,26 @@ def test_map_dolp_root_matches_the_companion_matrix(prior):
 
 
 def test_ml_update_and_zero_photon_pixels():
-    np.testing.assert_allclose(dolp_update(np.array([10.0, 4.0]), np.array([5.0, 1.0])), [0.5, 0.25])
+    np.testing.assert_allclose(
+        dolp_update(np.array([10.0, 4.0]), np.array([5.0, 1.0])), [0.5, 0.25]
+    )
     out = dolp_update(np.array([0.0, 0.0]), np.array([0.0, 0.0]), PRIOR_SETS["ch5"][1])
     np.testing.assert_allclose(out, 0.15)
     S, lab, P = scene(32)
     counts = detect(channel_images(S, ANGLES_0_45_90_135), 0, photons=50)
     counts[:, :8] = 0.0  # a dark stripe: no photons at all
-    res = blind_deconvolve(counts, ANGLES_0_45_90_135, iterations=10, psf_radius=4, priors=PRIOR_SETS["ch5"])
+    res = blind_deconvolve(
+        counts, ANGLES_0_45_90_135, iterations=10, psf_radius=4, priors=PRIOR_SETS["ch5"]
+    )
     for a in (res.s0, res.dolp, res.psfs):
         assert np.all(np.isfinite(a))
 
 
 def test_adaptive_priors_recentre_on_the_histogram():
     rng = np.random.default_rng(0)
-    v = np.r_[rng.normal(0.05, 0.01, 500), rng.normal(0.25, 0.03, 500)]  # near-normal: weak dielectric DOLP
+    v = np.r_[
+        rng.normal(0.05, 0.01, 500), rng.normal(0.25, 0.03, 500)
+    ]  # near-normal: weak dielectric DOLP
     die, met = adaptive_priors(v)
     assert abs(die.c3 - 0.25) < 0.02 and abs(met.c3 - 0.05) < 0.01
     assert die.name == "dielectric" and met.name == "metal"
@@ -179,7 +209,9 @@ def test_prior_thresholds_and_initial_psf():
     from scatterlab.imaging import circular_pupil, psf
 
     ch5 = PRIOR_SETS["ch5"]  # (dielectric, metal)
-    np.testing.assert_array_equal(classify_dolp([0.0, 0.2, 0.29, 0.31, 0.6, 1.0], ch5), [1, 1, 1, 0, 0, 0])
+    np.testing.assert_array_equal(
+        classify_dolp([0.0, 0.2, 0.29, 0.31, 0.6, 1.0], ch5), [1, 1, 1, 0, 0, 0]
+    )
     # three classes (Ch. VI): aluminium near 0.035, iron near 0.185, dielectric above
     np.testing.assert_array_equal(classify_dolp([0.02, 0.19, 0.7], PRIOR_SETS["ch6"]), [1, 2, 0])
     pupil = circular_pupil(32, 16)
@@ -243,8 +275,10 @@ def test_gerchberg_saxton_recovers_a_realizable_psf_and_pupil_mode_is_monotone()
     A = circular_pupil(32, 16)
     phase = remove_piston_tilt(phase_screen(32, 1.0, 8.0, np.random.default_rng(0)), A > 0)
     h = psf(A, phase, pad=2)
-    errs = [np.abs(gerchberg_saxton(h[None], A, np.zeros((1, 32, 32)), (64, 64), k)[0][0] - h).sum()
-            for k in (5, 50, 200)]
+    errs = [
+        np.abs(gerchberg_saxton(h[None], A, np.zeros((1, 32, 32)), (64, 64), k)[0][0] - h).sum()
+        for k in (5, 50, 200)
+    ]
     assert errs[0] > errs[1] > errs[2] and errs[2] < 1e-6, errs
 
     S, lab, P = scene(64)
@@ -252,8 +286,15 @@ def test_gerchberg_saxton_recovers_a_realizable_psf_and_pupil_mode_is_monotone()
     counts = detect(channel_images(S, ANGLES_0_45_90_135, h), rng, photons=5e3)
     grid = object_grid((64, 64), 12)
     psf0 = initial_psf(A, grid, rng=3)
-    res = blind_deconvolve(counts, ANGLES_0_45_90_135, psf0=psf0, pupil=A, psf_mode="pupil", iterations=30,
-                           psf_radius=12)
+    res = blind_deconvolve(
+        counts,
+        ANGLES_0_45_90_135,
+        psf0=psf0,
+        pupil=A,
+        psf_mode="pupil",
+        iterations=30,
+        psf_radius=12,
+    )
     L = res.loglik
     assert np.all(np.diff(L) >= -1e-10 * np.abs(L[1:]))
     truth = resample_psf(h, grid)

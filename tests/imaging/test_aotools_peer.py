@@ -8,7 +8,9 @@ import pytest
 
 from scatterlab.imaging import turbulence as T
 
-phasescreen = pytest.importorskip("aotools.turbulence.phasescreen", reason="AOtools (test extra) is not installed")
+phasescreen = pytest.importorskip(
+    "aotools.turbulence.phasescreen", reason="AOtools (test extra) is not installed"
+)
 pytestmark = [pytest.mark.peer, pytest.mark.slow]
 
 
@@ -16,8 +18,12 @@ def test_structure_function_accuracy_at_least_as_good_as_aotools():
     n, dx, r0, count = 64, 0.01, 0.1, 1500
     rng = np.random.default_rng(10)
     ours = np.stack([T.phase_screen(n, dx, r0, rng) for _ in range(count)])
-    peer = np.stack([phasescreen.ft_sh_phase_screen(r0, n, dx, 1e6, 1e-10, seed=int(s))
-                     for s in rng.integers(0, 2**31, count)])
+    peer = np.stack(
+        [
+            phasescreen.ft_sh_phase_screen(r0, n, dx, 1e6, 1e-10, seed=int(s))
+            for s in rng.integers(0, 2**31, count)
+        ]
+    )
     r = np.arange(1, n // 2 + 1)
     theory = T.STRUCTURE_CONSTANT * (r * dx / r0) ** (5 / 3)
     err_ours = np.abs(T.structure_function(ours, n // 2)[1] / theory - 1)[1:]

@@ -3,8 +3,19 @@
 import numpy as np
 import pytest
 
-from scatterlab.imaging import (ANGLES_0_45_90_135, ANGLES_0_60_120, channel_images, circular_pupil, convolve, detect,
-                                dolp_aop_from_stokes, painted_plate, psf, render_stokes, stokes_from_channels)
+from scatterlab.imaging import (
+    ANGLES_0_45_90_135,
+    ANGLES_0_60_120,
+    channel_images,
+    circular_pupil,
+    convolve,
+    detect,
+    dolp_aop_from_stokes,
+    painted_plate,
+    psf,
+    render_stokes,
+    stokes_from_channels,
+)
 from scatterlab.pbrdf import Model
 
 
@@ -18,7 +29,9 @@ def random_stokes(rng, shape=(16, 16)):
 @pytest.mark.parametrize("angles", [ANGLES_0_45_90_135, ANGLES_0_60_120])
 def test_stokes_estimation_exact_without_noise(angles, rng):
     S = random_stokes(rng)
-    np.testing.assert_allclose(stokes_from_channels(channel_images(S, angles), angles), S, atol=1e-13)
+    np.testing.assert_allclose(
+        stokes_from_channels(channel_images(S, angles), angles), S, atol=1e-13
+    )
     # Malus: a 0-deg polarizer sees (S0 + S1)/2
     np.testing.assert_allclose(channel_images(S, angles)[0], (S[0] + S[1]) / 2)
 
@@ -26,14 +39,22 @@ def test_stokes_estimation_exact_without_noise(angles, rng):
 def test_poisson_statistics_and_unbiased_stokes(rng):
     I = np.full((4, 64, 64), 0.5)
     counts = detect(I, rng, photons=400.0)
-    assert counts.mean() == pytest.approx(400.0, rel=0.01)       # 16384 pixels: 0.1 % standard error
-    assert counts.var() == pytest.approx(400.0, rel=0.05)        # Poisson: variance = mean
+    assert counts.mean() == pytest.approx(400.0, rel=0.01)  # 16384 pixels: 0.1 % standard error
+    assert counts.var() == pytest.approx(400.0, rel=0.05)  # Poisson: variance = mean
     S = random_stokes(rng, (8, 8))
     chans = channel_images(S, ANGLES_0_45_90_135)
-    est = np.mean([stokes_from_channels(detect(chans, rng, photons=1e3, scale=chans.max(), read_noise=3,
-                                                dark_current=5), ANGLES_0_45_90_135) for _ in range(400)], axis=0)
+    est = np.mean(
+        [
+            stokes_from_channels(
+                detect(chans, rng, photons=1e3, scale=chans.max(), read_noise=3, dark_current=5),
+                ANGLES_0_45_90_135,
+            )
+            for _ in range(400)
+        ],
+        axis=0,
+    )
     scale = 1e3 / chans.max()
-    np.testing.assert_allclose(est / scale, S, atol=0.02)        # unbiased within ~4 standard errors
+    np.testing.assert_allclose(est / scale, S, atol=0.02)  # unbiased within ~4 standard errors
 
 
 def test_zero_photon_pixels_and_dark_subtraction(rng):
@@ -80,4 +101,5 @@ def test_bad_input(rng):
         detect(-np.ones((1, 4, 4)), rng, photons=10)
     with pytest.raises(ValueError, match="labels"):
         from scatterlab.imaging import Scene
+
         Scene(np.full((4, 4), 3), [1.5], [0.3], 0.5, 0.5)

@@ -3,21 +3,30 @@
 import numpy as np
 import pytest
 
-from scatterlab.imaging import (airy_pattern, circular_pupil, diffraction_mtf, fit_r0, long_exposure_mtf, mtf,
-                                phase_screen, psf, radial_profile)
+from scatterlab.imaging import (
+    airy_pattern,
+    circular_pupil,
+    diffraction_mtf,
+    fit_r0,
+    long_exposure_mtf,
+    mtf,
+    phase_screen,
+    psf,
+    radial_profile,
+)
 
 
 def test_diffraction_limited_psf_is_the_airy_pattern():
     n, R, pad = 256, 64, 4
     h = psf(circular_pupil(n, R), pad=pad)
     c = h.shape[-1] // 2
-    row = h[c, c:c + 60] / h[c, c]
+    row = h[c, c : c + 60] / h[c, c]
     k = np.arange(60)
     # the pupil is centred between pixels: the PSF's centre is at pixel c; angle per pixel = lambda/(pad n px)
     v = np.pi * (2 * R) * k / (pad * n)
     np.testing.assert_allclose(row, airy_pattern(v), atol=5e-3)  # pixelated pupil edge: O(1/R)
     first_zero = 3.8317 * pad * n / (np.pi * 2 * R)  # 1.22 lambda / D in pixels
-    assert abs(np.argmin(row[:int(first_zero) + 3]) - first_zero) <= 0.5
+    assert abs(np.argmin(row[: int(first_zero) + 3]) - first_zero) <= 0.5
     assert h.sum() == pytest.approx(1.0)
 
 
@@ -37,7 +46,9 @@ def test_r0_fitted_from_simulated_long_exposure_mtf_within_5_percent(d_over_r0):
     r0 = D / d_over_r0
     pupil = circular_pupil(n, R)
     rng = np.random.default_rng(int(10 * d_over_r0))
-    H = np.mean([psf(pupil, phase_screen(n, D / (2 * R), r0, rng), pad=2) for _ in range(200)], axis=0)
+    H = np.mean(
+        [psf(pupil, phase_screen(n, D / (2 * R), r0, rng), pad=2) for _ in range(200)], axis=0
+    )
     r, prof = radial_profile(mtf(H))
     nu = r / (2 * R)
     assert fit_r0(nu[: 2 * R], prof[: 2 * R], D) == pytest.approx(r0, rel=0.05)

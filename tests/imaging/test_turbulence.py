@@ -1,6 +1,5 @@
 """Turbulence: spectra and screens against independent truths (closed forms, quadrature of the spectrum)."""
 
-
 import numpy as np
 import pytest
 
@@ -11,8 +10,9 @@ def test_structure_constant_and_spectrum_constant():
     assert T.STRUCTURE_CONSTANT == pytest.approx(6.88, abs=0.005)
     assert T.PSD_CONSTANT == pytest.approx(0.0229, abs=1e-4)  # Eq. 79
     r = np.array([1e-3, 0.05, 0.3, 3.0])
-    np.testing.assert_allclose(T.structure_function_theory(r, 0.1), T.STRUCTURE_CONSTANT * (r / 0.1) ** (5 / 3),
-                               rtol=1e-5)
+    np.testing.assert_allclose(
+        T.structure_function_theory(r, 0.1), T.STRUCTURE_CONSTANT * (r / 0.1) ** (5 / 3), rtol=1e-5
+    )
 
 
 def test_von_karman_variance_closed_form():
@@ -49,7 +49,10 @@ def test_kolmogorov_screens_match_6_88_within_5_percent_from_2px_to_half_width()
     ratio = batches.mean(0) / theory
     se = batches.std(0, ddof=1) / np.sqrt(len(batches)) / theory
     sel = r >= 2
-    assert np.all(np.abs(ratio[sel] - 1) <= 0.05 + 3 * se[sel]), (ratio[sel].min(), ratio[sel].max())
+    assert np.all(np.abs(ratio[sel] - 1) <= 0.05 + 3 * se[sel]), (
+        ratio[sel].min(),
+        ratio[sel].max(),
+    )
     assert np.all(se[sel] < 0.02)  # the test has the power to see a 5 % error
 
 
@@ -69,12 +72,16 @@ def test_fried_parameter_and_rytov_variance():
     k = 2 * np.pi / lam
     r0 = T.fried_parameter(cn2, L, lam)
     assert r0 == pytest.approx((0.423 * k**2 * cn2 * L) ** (-3 / 5))  # Eq. 75
-    assert T.fried_parameter(lambda z: cn2, L, lam) == pytest.approx(r0, rel=1e-10)  # Eq. 74, profile
+    assert T.fried_parameter(lambda z: cn2, L, lam) == pytest.approx(
+        r0, rel=1e-10
+    )  # Eq. 74, profile
     # Eq. 80 for constant Cn2 (1.23 Cn2 k^7/6 L^11/6) and Eq. 81 from r0 are the same number
     s2 = T.rytov_variance(cn2, L, lam)
     assert s2 == pytest.approx(1.2272727 * cn2 * k ** (7 / 6) * L ** (11 / 6), rel=1e-6)
     # Eq. 81's 2.91 is 1.2273 / 0.423 = 2.9014 rounded: the two agree to 0.3 %
-    assert T.rytov_variance_from_r0(r0, L, lam) == pytest.approx(s2 * 2.91 / (1.2272727 / 0.423), rel=1e-6)
+    assert T.rytov_variance_from_r0(r0, L, lam) == pytest.approx(
+        s2 * 2.91 / (1.2272727 / 0.423), rel=1e-6
+    )
     with pytest.warns(RuntimeWarning, match="Rytov"):
         T.rytov_variance(1e-13, 5000.0, 0.5e-6)
 
@@ -84,7 +91,9 @@ def test_reproducible_and_sliding_screen():
     b = T.phase_screen(64, 0.01, 0.1, rng=np.random.default_rng(3))
     np.testing.assert_array_equal(a, b)
     wheel = T.SlidingScreen(32, 0.01, 0.1, rng=4, length=128)
-    np.testing.assert_allclose(wheel.window(6)[:, :-1], wheel.window(5)[:, 1:], atol=1e-12)  # frozen flow
+    np.testing.assert_allclose(
+        wheel.window(6)[:, :-1], wheel.window(5)[:, 1:], atol=1e-12
+    )  # frozen flow
     np.testing.assert_allclose(wheel.window(130), wheel.window(2), atol=1e-12)  # periodic wheel
     np.testing.assert_allclose(wheel.window(5.0), wheel.window(5.5 - 0.5), atol=1e-12)
     half = wheel.window(5.5)
@@ -101,8 +110,16 @@ def test_piston_tilt_removal():
     np.testing.assert_allclose(T.remove_piston_tilt(plane), 0, atol=1e-12)
 
 
-@pytest.mark.parametrize("kw, match", [({"r0": 0.0}, "r0"), ({"r0": -1.0}, "r0"), ({"n": 2}, "n"),
-                                       ({"dx": 0.0}, "dx"), ({"L0": -1.0}, "L0")])
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"r0": 0.0}, "r0"),
+        ({"r0": -1.0}, "r0"),
+        ({"n": 2}, "n"),
+        ({"dx": 0.0}, "dx"),
+        ({"L0": -1.0}, "L0"),
+    ],
+)
 def test_bad_input(kw, match):
     args = {"n": 32, "dx": 0.01, "r0": 0.1}
     args.update(kw)

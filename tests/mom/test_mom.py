@@ -6,9 +6,20 @@ import warnings
 import numpy as np
 import pytest
 
-from scatterlab.mom import (PlaneWave, TaperedWave, correlation_length_for_slope, cylinder_echo_width,
-                            cylinder_surface_field, forward_backward, impedance_matrix, contour,
-                            incoherent_scattering, physical_optics_current, rough_surface, solve_tm)
+from scatterlab.mom import (
+    PlaneWave,
+    TaperedWave,
+    contour,
+    correlation_length_for_slope,
+    cylinder_echo_width,
+    cylinder_surface_field,
+    forward_backward,
+    impedance_matrix,
+    incoherent_scattering,
+    physical_optics_current,
+    rough_surface,
+    solve_tm,
+)
 from scatterlab.mom.efie import self_term_small_argument
 
 LAM = 1.0
@@ -72,7 +83,9 @@ def test_flat_mirror_sends_all_power_specularly():
     sol = solve_tm(x, y, LAM, incs)
     s = sol.scattering_coefficient(THS)
     np.testing.assert_allclose(np.trapezoid(s, THS, axis=0), 1.0, atol=5e-4)
-    np.testing.assert_allclose(THS[np.argmax(s, axis=0)], np.radians([0, 30, 60, 75]), atol=np.radians(0.1))
+    np.testing.assert_allclose(
+        THS[np.argmax(s, axis=0)], np.radians([0, 30, 60, 75]), atol=np.radians(0.1)
+    )
     near = np.abs(THS[:, None] - np.radians([0, 30, 60, 75])) < np.radians(5)
     frac = np.trapezoid(np.where(near, s, 0), THS, axis=0)
     assert np.all(frac > 0.999)
@@ -81,13 +94,18 @@ def test_flat_mirror_sends_all_power_specularly():
     # points per wavelength, 4x smaller at 20)
     c = contour(x, y)
     mid = slice(n // 2 - 100, n // 2 + 100)
-    dev10 = [np.max(np.abs(sol.current[mid, j] - physical_optics_current(c, inc, K)[mid])) for j, inc in enumerate(incs)]
+    dev10 = [
+        np.max(np.abs(sol.current[mid, j] - physical_optics_current(c, inc, K)[mid]))
+        for j, inc in enumerate(incs)
+    ]
     x20 = (np.arange(2 * n) - n) * 0.05
     sol20 = solve_tm(x20, np.zeros(2 * n), LAM, incs)
     c20 = contour(x20, np.zeros(2 * n))
     mid20 = slice(n - 200, n + 200)
-    dev20 = [np.max(np.abs(sol20.current[mid20, j] - physical_optics_current(c20, inc, K)[mid20]))
-             for j, inc in enumerate(incs)]
+    dev20 = [
+        np.max(np.abs(sol20.current[mid20, j] - physical_optics_current(c20, inc, K)[mid20]))
+        for j, inc in enumerate(incs)
+    ]
     scale = 2 * K
     assert np.max(dev10) < 0.02 * scale
     assert np.all(np.array(dev20[1:]) < np.array(dev10[1:]) / 3)
@@ -137,7 +155,7 @@ def test_surface_statistics_match_the_requested_values():
     assert abs(var.mean() - sh**2) < 4 * se
     # central differences see the slope spectrum through sin(k dx)/dx: the exact expectation
     k = np.linspace(0, np.pi / dx, 200001)
-    W = sh**2 * l / (2 * np.sqrt(np.pi)) * np.exp(-(k * l) ** 2 / 4)
+    W = sh**2 * l / (2 * np.sqrt(np.pi)) * np.exp(-((k * l) ** 2) / 4)
     expected_slope2 = 2 * np.trapezoid(W * (np.sin(k * dx) / dx) ** 2, k)
     assert abs(slope2.mean() - expected_slope2) < 4 * slope2.std() / np.sqrt(slope2.size)
     np.testing.assert_allclose(np.sqrt(expected_slope2), np.sqrt(2) * sh / l, rtol=0.01)
@@ -184,7 +202,12 @@ def test_grazing_steep_and_coarse_cases_are_finite_or_refused():
     with pytest.raises(ValueError, match="points per wavelength"):
         solve_tm(np.arange(100) * 0.5, np.zeros(100), LAM, PlaneWave(0.0))
     with pytest.raises(ValueError, match="plain Gaussian window"):
-        solve_tm(np.arange(400) * 0.1, np.zeros(400), LAM, TaperedWave(np.radians(60), 10.0, correction=False))
+        solve_tm(
+            np.arange(400) * 0.1,
+            np.zeros(400),
+            LAM,
+            TaperedWave(np.radians(60), 10.0, correction=False),
+        )
     with pytest.raises(ValueError, match="counter-clockwise"):
         x, y, _ = cylinder(5, 10)
         solve_tm(x[::-1], y[::-1], LAM, PlaneWave(0.0), closed=True)

@@ -10,6 +10,7 @@ def hemisphere_integral(fn, rtol=1e-7, atol=2e-9, full_circle=False):
     runs over [0, pi] twice; Mueller elements odd under that mirror need ``full_circle``. ``fn`` may return
     (npoints,) or (npoints, k) values. Tolerances: 1e-7 relative / 2e-9 absolute per cell, two
     orders below the tolerances the tests assert."""
+
     def f(x):
         mu, ph = x[:, 0], x[:, 1]
         tr = np.arccos(np.clip(mu, 0.0, 1.0))

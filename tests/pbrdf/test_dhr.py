@@ -31,7 +31,9 @@ def test_unshadowed_hemisphere_vs_sphere_closed_form():
         hemi = dhr_beckmann(th, sigma, "none", n_outer=32, n_inner=32)
         sphere = dhr_sphere_unshadowed(th, sigma)
         assert np.all(sphere >= hemi - 1e-12)
-    np.testing.assert_allclose(dhr_beckmann(th[:3], 0.02, "none"), dhr_sphere_unshadowed(th[:3], 0.02), atol=1e-12)
+    np.testing.assert_allclose(
+        dhr_beckmann(th[:3], 0.02, "none"), dhr_sphere_unshadowed(th[:3], 0.02), atol=1e-12
+    )
     assert dhr_sphere_unshadowed(0.0, 0.3) == pytest.approx(1.0)
 
 
@@ -40,7 +42,9 @@ def test_shadowed_dhr_never_exceeds_one_and_smooth_limit():
     for sigma in [1e-3, 0.1, 0.3, 0.6, 1.5]:
         rho = dhr_table()(th, sigma)
         assert np.all(rho <= 1) and np.all(rho >= 0)
-    np.testing.assert_allclose(dhr_table()(np.radians([0, 30, 60]), 1e-3), 1.0, atol=1e-6)  # sigma -> 0
+    np.testing.assert_allclose(
+        dhr_table()(np.radians([0, 30, 60]), 1e-3), 1.0, atol=1e-6
+    )  # sigma -> 0
 
 
 def test_cosine_average_by_independent_quadrature():
@@ -48,8 +52,16 @@ def test_cosine_average_by_independent_quadrature():
 
     table = dhr_table()
     for sigma in [0.05, 0.3, 0.8]:
-        ref = 2 * quad(lambda t: dhr_beckmann(t, sigma) * np.cos(t) * np.sin(t), 0, np.pi / 2,
-                       limit=200, epsabs=1e-11)[0]
+        ref = (
+            2
+            * quad(
+                lambda t: dhr_beckmann(t, sigma) * np.cos(t) * np.sin(t),
+                0,
+                np.pi / 2,
+                limit=200,
+                epsabs=1e-11,
+            )[0]
+        )
         assert table.cosine_average(sigma) == pytest.approx(ref, abs=2e-7)
 
 
@@ -61,4 +73,6 @@ def test_general_slope_quadrature_against_beckmann_specific_quadrature():
 
     th = np.radians([0, 20, 45, 70, 85, 89.5])
     for sigma in (0.05, 0.3, 1.0):
-        np.testing.assert_allclose(dhr_slope_quadrature(th, Beckmann(sigma)), dhr_beckmann(th, sigma), atol=2e-5)
+        np.testing.assert_allclose(
+            dhr_slope_quadrature(th, Beckmann(sigma)), dhr_beckmann(th, sigma), atol=2e-5
+        )

@@ -18,12 +18,21 @@ def test_rotation_cosines_eq170(rng):
     phi = rng.uniform(0, 2 * np.pi, 50)
     g = facet_geometry(ti, tr, phi)
     sb = np.sin(g.beta)
-    np.testing.assert_allclose(g.cos_gi, (g.cos_alpha - np.cos(ti) * g.cos_beta) / (np.sin(ti) * sb), atol=1e-10)
-    np.testing.assert_allclose(g.cos_gr, (g.cos_alpha - np.cos(tr) * g.cos_beta) / (np.sin(tr) * sb), atol=1e-10)
+    np.testing.assert_allclose(
+        g.cos_gi, (g.cos_alpha - np.cos(ti) * g.cos_beta) / (np.sin(ti) * sb), atol=1e-10
+    )
+    np.testing.assert_allclose(
+        g.cos_gr, (g.cos_alpha - np.cos(tr) * g.cos_beta) / (np.sin(tr) * sb), atol=1e-10
+    )
     # Eq. 167
-    np.testing.assert_allclose(np.cos(2 * g.beta), np.cos(ti) * np.cos(tr) + np.sin(ti) * np.sin(tr) * np.cos(phi),
-                               atol=1e-12)
-    np.testing.assert_allclose(g.cos_alpha, (np.cos(ti) + np.cos(tr)) / (2 * g.cos_beta), atol=1e-12)
+    np.testing.assert_allclose(
+        np.cos(2 * g.beta),
+        np.cos(ti) * np.cos(tr) + np.sin(ti) * np.sin(tr) * np.cos(phi),
+        atol=1e-12,
+    )
+    np.testing.assert_allclose(
+        g.cos_alpha, (np.cos(ti) + np.cos(tr)) / (2 * g.cos_beta), atol=1e-12
+    )
 
 
 def test_limits_normal_incidence_and_backscatter_are_continuous():

@@ -22,7 +22,9 @@ def test_pec_full_model_conserves_energy_eq175(diffuse, sigma, theta_deg, hemisp
     tolerance is the table's stated error (<= 1e-6) plus the cubature's."""
     m = Model(sigma, diffuse=diffuse)
     ti = np.radians(theta_deg)
-    total = hemisphere_integral(lambda tr, ph: m.mueller(PEC, np.full_like(tr, ti), tr, ph)[..., 0, 0])
+    total = hemisphere_integral(
+        lambda tr, ph: m.mueller(PEC, np.full_like(tr, ti), tr, ph)[..., 0, 0]
+    )
     assert total == pytest.approx(1.0, abs=2e-6)
 
 
@@ -31,7 +33,9 @@ def test_pec_full_model_conserves_energy_eq175(diffuse, sigma, theta_deg, hemisp
 def test_dhr_table_equals_independent_hemisphere_integral(sigma, theta_deg, hemisphere_integral):
     m = Model(sigma, diffuse="none")
     ti = np.radians(theta_deg)
-    spec = hemisphere_integral(lambda tr, ph: m.mueller(PEC, np.full_like(tr, ti), tr, ph)[..., 0, 0])
+    spec = hemisphere_integral(
+        lambda tr, ph: m.mueller(PEC, np.full_like(tr, ti), tr, ph)[..., 0, 0]
+    )
     assert m.dhr_pec(ti) == pytest.approx(spec, abs=1e-6)
 
 
@@ -42,8 +46,12 @@ def test_smooth_surface_limit_integrated_lobe_is_eq55(hemisphere_integral):
     dev = []
     for sigma in (0.002, 0.001):
         m = Model(sigma, diffuse="none")
-        M = hemisphere_integral(lambda tr, ph: m.mueller(ETA, np.full_like(tr, ti), tr, ph).reshape(-1, 16),
-                                full_circle=True, rtol=1e-9, atol=1e-11)
+        M = hemisphere_integral(
+            lambda tr, ph: m.mueller(ETA, np.full_like(tr, ti), tr, ph).reshape(-1, 16),
+            full_circle=True,
+            rtol=1e-9,
+            atol=1e-11,
+        )
         dev.append(np.max(np.abs(M.reshape(4, 4) - fresnel.mueller_matrix(ETA, ti))))
     assert dev[1] < 3e-5
     assert 3.0 < dev[0] / dev[1] < 5.0  # quadratic convergence in sigma
@@ -56,7 +64,14 @@ def test_shadowing_none_is_priest_germer_eq134():
     cos2b = np.cos(ti) * np.cos(tr) + np.sin(ti) * np.sin(tr) * np.cos(phi)
     cb = np.sqrt((1 + cos2b) / 2)
     ct = (np.cos(ti) + np.cos(tr)) / (2 * cb)  # Eq. 130: theta is the facet tilt
-    f = 1 / (2 * np.pi) / (4 * sigma**2) / ct**4 * np.exp(-(1 / ct**2 - 1) / (2 * sigma**2)) / (np.cos(tr) * np.cos(ti))
+    f = (
+        1
+        / (2 * np.pi)
+        / (4 * sigma**2)
+        / ct**4
+        * np.exp(-(1 / ct**2 - 1) / (2 * sigma**2))
+        / (np.cos(tr) * np.cos(ti))
+    )
     Rs, Rp = fresnel.reflectances(ETA, np.arccos(cb))
     np.testing.assert_allclose(F[:, 0, 0], f * (Rs + Rp) / 2, rtol=1e-12)
 
@@ -68,7 +83,9 @@ def test_torrance_sparrow_shadowing_only_attenuates():
     pg = Model(0.3, shadowing="none", diffuse="none").mueller(ETA, ti, tr, phi)[..., 0, 0]
     assert np.all(ts <= pg * (1 + 1e-12))
     near_normal = (ti < 0.3) & (tr < 0.3)
-    np.testing.assert_allclose(ts[near_normal], pg[near_normal], rtol=1e-12)  # G = 1 away from grazing
+    np.testing.assert_allclose(
+        ts[near_normal], pg[near_normal], rtol=1e-12
+    )  # G = 1 away from grazing
 
 
 def test_specular_term_reciprocity():
@@ -96,8 +113,9 @@ def test_phi_mirror_flips_exactly_the_off_diagonal_blocks():
     ti, tr, phi = rng.uniform(0, 1.5, 100), rng.uniform(0, 1.5, 100), rng.uniform(0, 2 * np.pi, 100)
     m = Model(0.3)
     S = np.diag([1.0, 1, -1, -1])
-    np.testing.assert_allclose(m.mueller(ETA, ti, tr, 2 * np.pi - phi), S @ m.mueller(ETA, ti, tr, phi) @ S,
-                               atol=1e-14)
+    np.testing.assert_allclose(
+        m.mueller(ETA, ti, tr, 2 * np.pi - phi), S @ m.mueller(ETA, ti, tr, phi) @ S, atol=1e-14
+    )
 
 
 def test_realizable_mueller_matrices():
@@ -138,15 +156,22 @@ def test_inplane_dolp_is_eq203():
     ti, tr = np.radians([30, 45, 60, 50]), np.radians([30, 45, 60, 35])
     beta, alpha = (ti + tr) / 2, (ti - tr) / 2
     Rs, Rp = fresnel.reflectances(ETA, beta)
-    G = np.minimum(1, np.minimum(2 * np.cos(alpha) * np.cos(tr), 2 * np.cos(alpha) * np.cos(ti)) / np.cos(beta))
-    gamma = G * np.exp(-np.tan(alpha) ** 2 / (2 * sigma**2)) / (
-        8 * np.pi * sigma**2 * np.cos(ti) * np.cos(tr) * np.cos(alpha) ** 4)
+    G = np.minimum(
+        1, np.minimum(2 * np.cos(alpha) * np.cos(tr), 2 * np.cos(alpha) * np.cos(ti)) / np.cos(beta)
+    )
+    gamma = (
+        G
+        * np.exp(-(np.tan(alpha) ** 2) / (2 * sigma**2))
+        / (8 * np.pi * sigma**2 * np.cos(ti) * np.cos(tr) * np.cos(alpha) ** 4)
+    )
     rho = m.dhr_pec(ti)
     expected = (Rs - Rp) / (Rs + Rp) * gamma / (gamma + (1 - rho) / np.pi)
     np.testing.assert_allclose(m.dolp(ETA, ti, tr), expected, rtol=1e-12)
     # the diffuse term lowers the DOLP below Thilak et al.'s smooth-facet value (Eq. 115)
     assert np.all(m.dolp(ETA, ti, tr) < dolp_thilak(ETA, ti, tr))
-    np.testing.assert_allclose(Model(sigma, diffuse="none").dolp(ETA, ti, tr), dolp_thilak(ETA, ti, tr), rtol=1e-13)
+    np.testing.assert_allclose(
+        Model(sigma, diffuse="none").dolp(ETA, ti, tr), dolp_thilak(ETA, ti, tr), rtol=1e-13
+    )
 
 
 def test_dolp_special_indices():
@@ -198,7 +223,9 @@ def test_array_sigma_broadcasts():
     m = Model(np.array([0.1, 0.3, 0.6])[:, None])
     d = m.dolp(ETA, np.radians([30, 45]), np.radians([30, 45]))
     assert d.shape == (3, 2)
-    np.testing.assert_allclose(d[1], Model(0.3).dolp(ETA, np.radians([30, 45]), np.radians([30, 45])))
+    np.testing.assert_allclose(
+        d[1], Model(0.3).dolp(ETA, np.radians([30, 45]), np.radians([30, 45]))
+    )
 
 
 @pytest.mark.parametrize(
@@ -222,7 +249,9 @@ def test_bad_input(call, match):
 def test_smith_dhr_quadrature_equals_independent_hemisphere_integral(hemisphere_integral):
     m = Model(0.3, shadowing="smith", diffuse="none")
     ti = np.radians(50)
-    spec = hemisphere_integral(lambda tr, ph: m.mueller(PEC, np.full_like(tr, ti), tr, ph)[..., 0, 0])
+    spec = hemisphere_integral(
+        lambda tr, ph: m.mueller(PEC, np.full_like(tr, ti), tr, ph)[..., 0, 0]
+    )
     assert m.dhr_pec(ti) == pytest.approx(spec, abs=1e-6)
     assert m.dhr_pec(ti) <= 1
 
@@ -236,7 +265,9 @@ def test_generalised_cauchy_distribution_in_the_model():
     hc = Model(distribution=HyperCauchy(np.sqrt(2 * nu) * sigma, nu), diffuse="none")
     bk = Model(sigma, diffuse="none")
     ti, tr = np.radians(40), np.radians([20, 40, 60])
-    np.testing.assert_allclose(hc.mueller(ETA, ti, tr, np.pi), bk.mueller(ETA, ti, tr, np.pi), rtol=0.02)
+    np.testing.assert_allclose(
+        hc.mueller(ETA, ti, tr, np.pi), bk.mueller(ETA, ti, tr, np.pi), rtol=0.02
+    )
     cauchy = Model(distribution=HyperCauchy(0.3, 2.0))
     rho = cauchy.dhr_pec(np.radians(30))
     assert 0 < rho <= 1
@@ -257,6 +288,10 @@ def test_array_sigma_larger_than_one_chunk_matches_scalar_models():
     F = Model(sig).mueller_linear(eta, ti, ti + 0.1, 2.0)
     for s in (0.1, 0.3, 0.6):
         sel = sig[:, 0] == s
-        np.testing.assert_allclose(got[sel], np.broadcast_to(Model(s).dolp(eta, ti, ti), got[sel].shape), rtol=1e-8)
+        np.testing.assert_allclose(
+            got[sel], np.broadcast_to(Model(s).dolp(eta, ti, ti), got[sel].shape), rtol=1e-8
+        )
         want = Model(s).mueller_linear(eta, ti, ti + 0.1, 2.0)
-        np.testing.assert_allclose(F[sel], np.broadcast_to(want, F[sel].shape), rtol=1e-5, atol=1e-12)
+        np.testing.assert_allclose(
+            F[sel], np.broadcast_to(want, F[sel].shape), rtol=1e-5, atol=1e-12
+        )

@@ -180,5 +180,6 @@ def test_tiny_index_reciprocity_at_exact_backscatter(eta):
     F = m.mueller(eta, th, th, 0.0)
     Q = np.diag([1.0, 1, 1, -1])
     np.testing.assert_allclose(F, Q @ np.swapaxes(F, -1, -2) @ Q, rtol=1e-12, atol=0)
-    np.testing.assert_allclose(np.diagonal(F, axis1=-2, axis2=-1),
-                               F[:, :1, 0] * np.array([1.0, 1, -1, -1]), rtol=1e-12)
+    np.testing.assert_allclose(
+        np.diagonal(F, axis1=-2, axis2=-1), F[:, :1, 0] * np.array([1.0, 1, -1, -1]), rtol=1e-12
+    )

@@ -25,6 +25,7 @@ pytestmark = pytest.mark.peer
 
 D = np.diag([1.0, 1, -1, 1])
 
+
 def six_digits(x: float) -> float:
     return float(f"{x:.6g}")
 
@@ -44,16 +45,24 @@ MATERIALS = {
 def scatmech_model(eta, sigma, shadowed):
     name = "Shadowed_Facet_BRDF_Model" if shadowed else "Facet_BRDF_Model"
     kw = {"shadow": "Torrance_Sparrow_Shadow_Function"} if shadowed else {}
-    m = brdf.BRDF_Model(name, substrate=complex(eta.real, -eta.imag),
-                        sdf="Gaussian_Slope_Distribution_Function", **kw)
-    m.setParameter("sdf.s", np.sqrt(2) * sigma)  # sigma is chosen so that sqrt(2) sigma has 6 digits
+    m = brdf.BRDF_Model(
+        name,
+        substrate=complex(eta.real, -eta.imag),
+        sdf="Gaussian_Slope_Distribution_Function",
+        **kw,
+    )
+    m.setParameter(
+        "sdf.s", np.sqrt(2) * sigma
+    )  # sigma is chosen so that sqrt(2) sigma has 6 digits
     return m
 
 
 def geometries(rng, n):
     ti = np.radians(rng.uniform(10, 85, n))
     tr = np.radians(rng.uniform(10, 85, n))
-    phi = np.where(rng.uniform(size=n) < 0.3, np.pi, rng.uniform(0, 2 * np.pi, n))  # in and out of plane
+    phi = np.where(
+        rng.uniform(size=n) < 0.3, np.pi, rng.uniform(0, 2 * np.pi, n)
+    )  # in and out of plane
     return ti, tr, phi
 
 

@@ -34,15 +34,27 @@ def test_jones_to_mueller_broadcasts(rng):
 
 
 def test_textbook_ideal_elements():
-    np.testing.assert_allclose(P.linear_polarizer(0), 0.5 * np.array(
-        [[1, 1, 0, 0], [1, 1, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]), atol=1e-15)
-    np.testing.assert_allclose(P.linear_polarizer(np.pi / 2), 0.5 * np.array(
-        [[1, -1, 0, 0], [-1, 1, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]), atol=1e-15)
-    np.testing.assert_allclose(P.linear_polarizer(np.pi / 4), 0.5 * np.array(
-        [[1, 0, 1, 0], [0, 0, 0, 0], [1, 0, 1, 0], [0, 0, 0, 0]]), atol=1e-15)
+    np.testing.assert_allclose(
+        P.linear_polarizer(0),
+        0.5 * np.array([[1, 1, 0, 0], [1, 1, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]),
+        atol=1e-15,
+    )
+    np.testing.assert_allclose(
+        P.linear_polarizer(np.pi / 2),
+        0.5 * np.array([[1, -1, 0, 0], [-1, 1, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]]),
+        atol=1e-15,
+    )
+    np.testing.assert_allclose(
+        P.linear_polarizer(np.pi / 4),
+        0.5 * np.array([[1, 0, 1, 0], [0, 0, 0, 0], [1, 0, 1, 0], [0, 0, 0, 0]]),
+        atol=1e-15,
+    )
     # quarter-wave plate, fast axis vertical: the matrix printed in Eq. 39
-    np.testing.assert_allclose(P.linear_retarder(np.pi / 2, np.pi / 2), np.array(
-        [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, -1], [0, 0, 1, 0]]), atol=1e-15)
+    np.testing.assert_allclose(
+        P.linear_retarder(np.pi / 2, np.pi / 2),
+        np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, -1], [0, 0, 1, 0]]),
+        atol=1e-15,
+    )
     # half-wave plate at 22.5 deg turns horizontal into +45 deg
     S = P.apply(P.linear_retarder(np.pi, np.pi / 8), [1, 1, 0, 0])
     np.testing.assert_allclose(S, [1, 0, 1, 0], atol=1e-15)
@@ -53,21 +65,33 @@ def test_textbook_ideal_elements():
 
 def test_worked_example_eq39():
     """Horizontal light through an LP at 45 deg then a QWP with vertical fast axis: (1,0,0,1)/2."""
-    S = P.apply(P.linear_retarder(np.pi / 2, np.pi / 2) @ P.linear_polarizer(np.pi / 4), [1, 1, 0, 0])
+    S = P.apply(
+        P.linear_retarder(np.pi / 2, np.pi / 2) @ P.linear_polarizer(np.pi / 4), [1, 1, 0, 0]
+    )
     np.testing.assert_allclose(S, [0.5, 0, 0, 0.5], atol=1e-15)
     # the same through Jones vectors and Eq. 133's Stokes convention
     E = P.linear_retarder_jones(np.pi / 2, np.pi / 2) @ P.linear_polarizer_jones(np.pi / 4) @ [1, 0]
     np.testing.assert_allclose(P.jones_to_stokes(E), [0.5, 0, 0, 0.5], atol=1e-15)
-    np.testing.assert_allclose(P.jones_to_stokes(P.circular_jones_vector("right")), [1, 0, 0, 1], atol=1e-15)
+    np.testing.assert_allclose(
+        P.jones_to_stokes(P.circular_jones_vector("right")), [1, 0, 0, 1], atol=1e-15
+    )
 
 
 @pytest.mark.parametrize("angle", [0.0, 0.4, 1.1, 2.5])
 def test_element_mueller_equals_converted_jones(angle):
-    np.testing.assert_allclose(P.jones_to_mueller(P.linear_polarizer_jones(angle, 0.01)),
-                               P.linear_polarizer(angle, 0.01), atol=1e-14)
-    np.testing.assert_allclose(P.jones_to_mueller(P.linear_retarder_jones(0.9, angle)),
-                               P.linear_retarder(0.9, angle), atol=1e-14)
-    np.testing.assert_allclose(P.jones_to_mueller(P.rotator_jones(angle)), P.rotator(angle), atol=1e-14)
+    np.testing.assert_allclose(
+        P.jones_to_mueller(P.linear_polarizer_jones(angle, 0.01)),
+        P.linear_polarizer(angle, 0.01),
+        atol=1e-14,
+    )
+    np.testing.assert_allclose(
+        P.jones_to_mueller(P.linear_retarder_jones(0.9, angle)),
+        P.linear_retarder(0.9, angle),
+        atol=1e-14,
+    )
+    np.testing.assert_allclose(
+        P.jones_to_mueller(P.rotator_jones(angle)), P.rotator(angle), atol=1e-14
+    )
 
 
 def test_malus_law():
@@ -81,14 +105,18 @@ def test_malus_law():
 
 def test_non_ideal_polarizer_extinction():
     eps = 1e-3
-    crossed = P.apply(P.linear_polarizer(np.pi / 2, eps) @ P.linear_polarizer(0, eps), [1, 0, 0, 0])[0]
+    crossed = P.apply(
+        P.linear_polarizer(np.pi / 2, eps) @ P.linear_polarizer(0, eps), [1, 0, 0, 0]
+    )[0]
     aligned = P.apply(P.linear_polarizer(0, eps) @ P.linear_polarizer(0, eps), [1, 0, 0, 0])[0]
     assert crossed == pytest.approx(eps)
     assert aligned == pytest.approx(0.5 * (1 + eps**2))
 
 
 def test_retarder_conserves_intensity_and_dop(rng):
-    S = P.stokes_vector(1.0, rng.uniform(0, 1, 50), rng.uniform(-1, 1, 50), rng.uniform(-0.7, 0.7, 50))
+    S = P.stokes_vector(
+        1.0, rng.uniform(0, 1, 50), rng.uniform(-1, 1, 50), rng.uniform(-0.7, 0.7, 50)
+    )
     out = P.apply(P.linear_retarder(rng.uniform(0, 6, 50), rng.uniform(0, 3, 50)), S)
     np.testing.assert_allclose(out[..., 0], S[..., 0], atol=1e-14)
     np.testing.assert_allclose(P.dop(out), P.dop(S), atol=1e-12)
@@ -141,7 +169,9 @@ def test_nearest_physical_mueller(rng):
     assert np.all(P.is_physical_mueller(fixed))
     np.testing.assert_allclose(P.nearest_physical_mueller(fixed), fixed, atol=1e-12)
     # never farther from the truth than the noisy estimate (projection onto a convex set)
-    assert np.all(np.linalg.norm(fixed - M, axis=(-2, -1)) <= np.linalg.norm(noisy - M, axis=(-2, -1)) + 1e-12)
+    assert np.all(
+        np.linalg.norm(fixed - M, axis=(-2, -1)) <= np.linalg.norm(noisy - M, axis=(-2, -1)) + 1e-12
+    )
 
 
 def test_jones_kernel_blocks_and_diagonal_form_equal_the_kronecker_derivation():
