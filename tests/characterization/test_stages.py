@@ -192,3 +192,15 @@ def test_a_scene_that_is_not_the_default_gets_intervals_covering_its_truth():
     for region in ("paint", "titanium"):
         p = res.metrics["no_turbulence"][f"posterior_{region}"]
         assert p["n"]["covers95"] and p["kappa"]["covers95"], (region, p["n"], p["kappa"])
+
+
+def test_bias_correction_keeps_a_dolp_in_its_range():
+    """Subtracting a re-simulated bias never takes a region mean outside [0, 1] (it happened with a corrected
+    paint at 0.95 and a bias of -0.12), and the bias stays in the error."""
+    from scatterlab.characterization.estimation import RegionData
+    from scatterlab.characterization.self_calibration import bias_corrected
+
+    r = RegionData("paint", np.array([0.95, 0.02]), np.array([0.01, 0.01]), np.zeros(2), np.zeros(2), 100)
+    c = bias_corrected(r, np.array([-0.12, 0.05]))
+    np.testing.assert_allclose(c.mean, [1.0, 0.0])
+    np.testing.assert_allclose(c.error, np.hypot(0.01, [0.06, 0.025]))
