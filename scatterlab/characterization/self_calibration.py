@@ -129,6 +129,6 @@ def bias_corrected(region: RegionData, bias) -> RegionData:
     """``region`` with the re-simulated ``bias`` (M,) subtracted and a fraction of it added to its error."""
     b = np.asarray(bias, float)
     sys_err = SYSTEMATIC_FRACTION * np.abs(b)
-    return replace(
-        region, mean=region.mean - b, error=np.sqrt(region.error**2 + sys_err**2), bias=b
-    )
+    # a DOLP is in [0, 1]: a corrected mean beyond it keeps the bound (its error still carries the bias)
+    mean = np.clip(region.mean - b, 0.0, 1.0)
+    return replace(region, mean=mean, error=np.sqrt(region.error**2 + sys_err**2), bias=b)

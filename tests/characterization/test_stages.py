@@ -200,7 +200,9 @@ def test_bias_correction_keeps_a_dolp_in_its_range():
     from scatterlab.characterization.estimation import RegionData
     from scatterlab.characterization.self_calibration import bias_corrected
 
-    r = RegionData("paint", np.array([0.95, 0.02]), np.array([0.01, 0.01]), np.zeros(2), np.zeros(2), 100)
+    r = RegionData(
+        "paint", np.array([0.95, 0.02]), np.array([0.01, 0.01]), np.zeros(2), np.zeros(2), 100
+    )
     c = bias_corrected(r, np.array([-0.12, 0.05]))
     np.testing.assert_allclose(c.mean, [1.0, 0.0])
     np.testing.assert_allclose(c.error, np.hypot(0.01, [0.06, 0.025]))
