@@ -181,13 +181,38 @@ def plate_observations(
     ctx, theta_deg, d_over_r0, *, priors, iterations, size, reps=1, adaptive=False, plates=None
 ):
     """Simulated painted plates (Figs. 47-61) at one specular geometry, through turbulence,
-    corrected by the EM with ``priors`` and registered: {plate name: [observation per repetition]}
-    (see ``scatterlab.characterization.pipeline.observe``); the D/r0 list may give one value per
-    plate."""
+    corrected by the EM with ``priors`` and registered: {plate name: [observation per repetition]}.
+
+    Each observation is a dict ``{case: {kind: {"s0", "dolp", "classes", "priors"}}}`` built from
+    :func:`scatterlab.characterization.pipeline.observe`: ``no_turbulence/degraded`` is the reference
+    (the no-turbulence image restored with its known PSF, classified by the priors' DOLP thresholds as
+    in Ch. V); per D/r0, ``degraded`` (thresholds) and ``corrected`` (EM, the priors' continuation).
+    With ``adaptive`` (Sec. 8.1.1) the priors are re-centred on the histogram of the corrected ML DOLP
+    and the corrected image is classified by their thresholds.
+    """
     from scatterlab.characterization import SceneConfig
     from scatterlab.characterization.pipeline import observe
     from scatterlab.characterization.scene_config import Plate
+    from scatterlab.deconvolution import adaptive_priors, classify_dolp
     from scatterlab.imaging import painted_plate
+
+    def as_dict(o):
+        ref = o.images[("no_turbulence", "restored")]
+        out = {
+            "no_turbulence": {
+                "degraded": _image(ref, classify_dolp(np.nan_to_num(ref.dolp), priors), priors)
+            }
+        }
+        for case, kind in o.images:
+            if case == "no_turbulence":
+                continue
+            img = o.images[(case, kind)]
+            cls, pri = img.classes, priors
+            if adaptive and kind == "corrected":
+                pri = adaptive_priors(np.nan_to_num(img.dolp), base=priors)
+                cls = classify_dolp(np.nan_to_num(img.dolp), pri)
+            out.setdefault(case, {})[kind] = _image(img, cls, pri)
+        return out
 
     plates = plates or [Plate(), Plate("steel", 3.60, 5.88)]
     out = {}
@@ -204,17 +229,22 @@ def plate_observations(
         out[plate.metal] = {
             "labels": labels,
             "obs": [
-                observe(
-                    plate,
-                    labels,
-                    [np.radians(theta_deg)],
-                    cfg,
-                    ctx.rng,
-                    priors=priors,
-                    executor=ctx.executor,
-                    adaptive=adaptive,
-                )[0]
+                as_dict(
+                    observe(
+                        plate,
+                        labels,
+                        [np.radians(theta_deg)],
+                        cfg,
+                        ctx.rng,
+                        priors=priors,
+                        executor=ctx.executor,
+                    )[0]
+                )
                 for _ in range(reps)
             ],
         }
     return out
+
+
+def _image(img, classes, priors):
+    return {"s0": img.s0, "dolp": np.nan_to_num(img.dolp), "classes": classes, "priors": priors}
