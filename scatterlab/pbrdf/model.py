@@ -61,6 +61,7 @@ from scatterlab.pbrdf.distributions import Beckmann, FacetDistribution
 from scatterlab.pbrdf.dolp import facet_jones
 from scatterlab.pbrdf.geometry import check_angles, facet_geometry, in_plane_geometry
 from scatterlab.pbrdf.shadowing import shadowing_strategy
+from scatterlab.polarization import dolp as stokes_dolp
 from scatterlab.polarization.mueller import mueller_from_jones_elements
 
 __all__ = ["Model", "PEC", "DIFFUSE", "dhr_slope_quadrature"]
@@ -297,10 +298,7 @@ class Model:
         ndarray in ``[0, 1]`` or NaN, broadcast shape.
         """
         F = self._evaluate(eta, theta_i, theta_r, phi, (3, 1))[..., 0]
-        f00 = F[..., 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            d = np.hypot(F[..., 1], F[..., 2]) / f00
-        return np.where(f00 > 0, np.clip(d, 0.0, 1.0), np.nan)
+        return np.clip(stokes_dolp(F), 0.0, 1.0)  # NaN where F00 = 0
 
     def aop(self, eta, theta_i, theta_r, phi) -> np.ndarray:
         """Angle of linear polarization [rad] in ``(-pi/2, pi/2]`` for unpolarized illumination.

@@ -31,9 +31,11 @@ from scatterlab.polarization.mueller import (
 from scatterlab.polarization.stokes import (
     aop,
     dolp,
+    dolp_aop,
     dop,
     is_physical_stokes,
     jones_to_stokes,
+    signed_dolp,
     stokes_vector,
 )
 
@@ -62,5 +64,7 @@ __all__ = [
     "dop",
     "dolp",
     "aop",
+    "dolp_aop",
+    "signed_dolp",
     "is_physical_stokes",
 ]

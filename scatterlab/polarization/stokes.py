@@ -6,10 +6,18 @@ I_{-45}`` and ``S3 = 2 Im(E_s^* E_p)``, the sign that makes the Jones-to-Mueller
 conversion of Eq. 133 and the worked example of Eq. 39 agree (see
 :mod:`scatterlab.polarization.jones`); ``(1, 0, 0, 1)`` is right circular as in Eq. 38.
 
-Undefined quantities: the degree of polarization and the angle of polarization
-of zero light (``S0 == 0``) are mathematically undefined and are returned as NaN
-(documented, never a crash); the angle of polarization of light with no linear
-part (``S1 = S2 = 0``) is returned as NaN too.
+Undefined quantities (the one zero-light rule of the package): the degree of
+polarization and the angle of polarization of zero light (``S0 <= min_intensity``,
+``min_intensity = 0`` by default) are mathematically undefined and are returned as
+NaN (documented, never a crash, never a warning); the angle of polarization of light
+with no linear part (``S1 = S2 = 0``) is returned as NaN too. Images that need a mask
+take ``numpy.isnan`` of the result, or :func:`dolp_aop` with ``mask=True``.
+
+:func:`dolp` is the one DOLP-from-Stokes computation of the package: imaging,
+deconvolution, characterization, pBRDF and plotting call it. :func:`signed_dolp` is
+the projection ``(S1 cos 2a + S2 sin 2a) / S0`` onto a known AOP ``a`` (specular
+geometry fixes ``a = 0``): unlike :func:`dolp` it has no noise (Rician) bias and can
+be negative. Both accept ``(..., 4)`` or the linear block ``(..., 3)``, axis last.
 """
 
 from __future__ import annotations
@@ -24,6 +32,8 @@ __all__ = [
     "dop",
     "dolp",
     "aop",
+    "dolp_aop",
+    "signed_dolp",
     "is_physical_stokes",
 ]
 
@@ -93,9 +103,28 @@ def stokes_vector(intensity=1.0, dop=0.0, aop=0.0, ellipticity=0.0) -> np.ndarra
     )
 
 
-def _ratio(num, den):
+def _ratio(num, den, floor=0.0):
+    """``num / den`` where ``den > floor``, NaN elsewhere (no warnings)."""
+    ok = den > floor
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan)
+        return np.where(ok, num / np.where(ok, den, 1.0), np.nan)
+
+
+def _linear(S, name="S"):
+    S = np.asarray(S, float)
+    if S.ndim == 0 or S.shape[-1] not in (3, 4):
+        raise ValueError(
+            f"{name} must be Stokes vectors with the Stokes axis last, shape (..., 4) or (..., 3), "
+            f"got {S.shape}"
+        )
+    return S  # NaN and inf propagate as NaN (undefined), no warnings
+
+
+def _min_intensity(v):
+    v = float(v)
+    if not (np.isfinite(v) and v >= 0):
+        raise ValueError(f"min_intensity must be finite and >= 0, got {v!r}")
+    return v
 
 
 def dop(S) -> np.ndarray:
@@ -113,44 +142,91 @@ def dop(S) -> np.ndarray:
     return _ratio(np.sqrt(S[..., 1] ** 2 + S[..., 2] ** 2 + S[..., 3] ** 2), S[..., 0])
 
 
-def dolp(S) -> np.ndarray:
-    """Degree of linear polarization ``sqrt(S1^2 + S2^2) / S0``; NaN where ``S0 == 0``.
+def dolp(S, *, min_intensity: float = 0.0) -> np.ndarray:
+    """Degree of linear polarization ``sqrt(S1^2 + S2^2) / S0``; NaN where ``S0 <= min_intensity``.
+
+    The one DOLP-from-Stokes computation of the package. Not clipped: noisy estimated Stokes
+    images can give a DOLP above 1 (an honest estimate, not a bounded one); a NaN (or an
+    infinite S0) in ``S`` gives NaN.
 
     Parameters
     ----------
-    S : array_like, shape ``(..., 4)`` (or ``(..., 3)``: the linear block).
+    S : array_like, shape ``(..., 4)`` (or ``(..., 3)``: the linear block), Stokes axis last.
+    min_intensity : float, ``>= 0``
+        Light at or below this ``S0`` counts as no light (same units as ``S``).
 
     Returns
     -------
-    ndarray, shape ``(...)``.
+    ndarray, shape ``(...)``, dimensionless.
     """
-    S = as_finite(S, "S")
-    if S.shape[-1] not in (3, 4):
-        raise ValueError(f"S must have shape (..., 4) or (..., 3), got {S.shape}")
-    return _ratio(np.hypot(S[..., 1], S[..., 2]), S[..., 0])
+    S = _linear(S)
+    return _ratio(np.hypot(S[..., 1], S[..., 2]), S[..., 0], _min_intensity(min_intensity))
 
 
-def aop(S) -> np.ndarray:
-    """Angle of polarization ``0.5 * arctan2(S2, S1)`` [rad] in ``(-pi/2, pi/2]`` (Eq. 41).
+def signed_dolp(S, aop=0.0, *, min_intensity: float = 0.0) -> np.ndarray:
+    """DOLP projected on a known AOP: ``(S1 cos 2a + S2 sin 2a) / S0``; NaN where ``S0 <= min_intensity``.
 
-    Measured from the s axis. NaN where there is no linear polarization
-    (``S1 = S2 = 0``, e.g. unpolarized or circular light) or no light.
+    Used where the geometry fixes the AOP (unpolarized light observed in the specular plane:
+    ``a = 0``, so it is ``S1 / S0``). Equal to :func:`dolp` for noise-free light polarized at
+    ``a``; for noisy estimates it is unbiased (no Rician bias) and can be negative.
 
     Parameters
     ----------
-    S : array_like, shape ``(..., 4)`` or ``(..., 3)``
+    S : array_like, shape ``(..., 4)`` or ``(..., 3)``, Stokes axis last.
+    aop : array_like [rad], broadcasting with ``S[..., 0]``.
+    min_intensity : float, ``>= 0``
+
+    Returns
+    -------
+    ndarray, shape ``(...)``, dimensionless, in ``[-1, 1]`` for physical Stokes vectors.
+    """
+    S = _linear(S)
+    a2 = 2 * np.asarray(aop, float)
+    proj = S[..., 1] * np.cos(a2) + S[..., 2] * np.sin(a2)
+    return _ratio(proj, S[..., 0], _min_intensity(min_intensity))
+
+
+def aop(S, *, min_intensity: float = 0.0) -> np.ndarray:
+    """Angle of polarization ``0.5 * arctan2(S2, S1)`` [rad] in ``(-pi/2, pi/2]`` (Eq. 41).
+
+    Measured from the s axis. NaN where there is no linear polarization
+    (``S1 = S2 = 0``, e.g. unpolarized or circular light) or no light (``S0 <= min_intensity``).
+
+    Parameters
+    ----------
+    S : array_like, shape ``(..., 4)`` or ``(..., 3)``, Stokes axis last.
+    min_intensity : float, ``>= 0``
 
     Returns
     -------
     ndarray [rad], shape ``(...)``.
     """
-    S = as_finite(S, "S")
-    if S.shape[-1] not in (3, 4):
-        raise ValueError(f"S must have shape (..., 4) or (..., 3), got {S.shape}")
+    S = _linear(S)
     s1, s2 = S[..., 1], S[..., 2]
     a = 0.5 * np.arctan2(s2, s1)
     a = np.where(a <= -np.pi / 2, a + np.pi, a)
-    return np.where((s1 == 0) & (s2 == 0), np.nan, a)
+    dark = ~(S[..., 0] > _min_intensity(min_intensity))
+    return np.where(((s1 == 0) & (s2 == 0)) | dark, np.nan, a)
+
+
+def dolp_aop(S, *, min_intensity: float = 0.0, mask: bool = False):
+    """DOLP and AOP together (:func:`dolp`, :func:`aop`), optionally with the mask of defined pixels.
+
+    Parameters
+    ----------
+    S : array_like, shape ``(..., 4)`` or ``(..., 3)``, Stokes axis last (images: ``(H, W, 3)``).
+    min_intensity : float, ``>= 0``
+        ``S0`` at or below it is no light: DOLP and AOP NaN there.
+    mask : bool
+        Also return ``valid``, True where the DOLP is defined (``S0 > min_intensity``).
+
+    Returns
+    -------
+    dolp : ndarray ``(...)``; aop : ndarray ``(...)`` [rad]; valid : bool ndarray ``(...)`` if ``mask``.
+    """
+    d = dolp(S, min_intensity=min_intensity)
+    a = aop(S, min_intensity=min_intensity)
+    return (d, a, ~np.isnan(d)) if mask else (d, a)
 
 
 def is_physical_stokes(S, atol: float = 1e-12) -> np.ndarray:
