@@ -22,7 +22,7 @@ STUDY = {
 
 def run(ctx):
     n = 64 if ctx.quick else 128  # pupil grid; PSFs and images are 2n x 2n (Nyquist)
-    obj = render_stokes(painted_plate(2 * n, rng=ctx.rng))[0]
+    obj = render_stokes(painted_plate(2 * n, rng=ctx.rng))[..., 0]
     radii = (n / 8, n / 4, n / 2)
     r0_px = 2 * radii[-1] / 43.0  # D/r0 = 43 at the largest aperture
     screen = phase_screen(n, 1.0, r0_px, ctx.rng)  # pixel units: dx = 1 px

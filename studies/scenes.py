@@ -36,7 +36,7 @@ def run(ctx):
         with ctx.step(f"render_{name}"):
             S = render_stokes(scene)
         clean_dolp, _ = dolp_aop_from_stokes(S)
-        axes[2 * p, 0].imshow(S[0], cmap="gray")
+        axes[2 * p, 0].imshow(S[..., 0], cmap="gray")
         axes[2 * p, 0].set_title(f"{name}: S0, no turbulence", fontsize=8)
         axes[2 * p + 1, 0].imshow(clean_dolp, vmin=0, vmax=1)
         axes[2 * p + 1, 0].set_title("DOLP, no turbulence", fontsize=8)
@@ -54,7 +54,7 @@ def run(ctx):
                 dolp, _ = dolp_aop_from_stokes(Se, min_intensity=1.0)
             err = float(np.sqrt(np.mean((dolp.filled(0) - clean_dolp) ** 2)))
             ctx.metrics[f"dolp_rmse_{name}_{d_r0}"] = err
-            axes[2 * p, k + 1].imshow(Se[0], cmap="gray")
+            axes[2 * p, k + 1].imshow(Se[..., 0], cmap="gray")
             axes[2 * p, k + 1].set_title(f"S0, D/r0 = {d_r0}", fontsize=8)
             axes[2 * p + 1, k + 1].imshow(dolp.filled(0), vmin=0, vmax=1)
             axes[2 * p + 1, k + 1].set_title(f"DOLP, D/r0 = {d_r0} (RMSE {err:.3f})", fontsize=8)
@@ -64,7 +64,7 @@ def run(ctx):
         ctx.metrics[f"clean_dolp_paint_{name}"] = float(clean_dolp[scene.labels == 0].mean())
         ctx.metrics[f"clean_dolp_metal_{name}"] = float(clean_dolp[scene.labels == 1].mean())
         ctx.metrics[f"brightness_metal_over_paint_{name}"] = float(
-            S[0][scene.labels == 1].mean() / S[0][scene.labels == 0].mean()
+            S[..., 0][scene.labels == 1].mean() / S[..., 0][scene.labels == 0].mean()
         )
     ctx.save_figure(fig, "scenes")
     m = ctx.metrics

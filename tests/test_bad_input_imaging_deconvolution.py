@@ -38,6 +38,8 @@ CASES = [
         "prior_weight",
     ),
     (lambda: blind_deconvolve(GOOD, np.array([0, 45, 90, 135.0]), iterations=2), "radians"),
+    (lambda: imaging.channel_images(np.ones((3, 8, 8)), A), r"stokes .*\(H, W, 3\)"),
+    (lambda: imaging.dolp_aop_from_stokes(np.ones((3, 8, 8))), r"S .*\(H, W, 3\)"),
     (lambda: SuperGaussianPrior(1e40, 0.3), "c2"),
     (lambda: SuperGaussianPrior(3.0, 1.5), "c3"),
 ]

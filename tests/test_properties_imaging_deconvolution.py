@@ -27,25 +27,21 @@ def test_detection_and_stokes_of_zero_photon_pixels_stay_finite(
     photons, dark_fraction, read_noise, seed
 ):
     rng = np.random.default_rng(seed)
-    S = np.zeros((3, 8, 8))
-    S[0] = rng.uniform(0, 1, (8, 8)) * (
+    S = np.zeros((8, 8, 3))  # (H, W, 3), Stokes axis last
+    S[..., 0] = rng.uniform(0, 1, (8, 8)) * (
         rng.uniform(0, 1, (8, 8)) > dark_fraction
     )  # dark pixels: no light
-    S[1] = 0.5 * S[0]
+    S[..., 1] = 0.5 * S[..., 0]
     counts = imaging.detect(
         imaging.channel_images(S, A), rng, photons=photons, read_noise=read_noise
     )
     assert np.all(np.isfinite(counts))
     est = imaging.stokes_from_channels(counts, A)
     assert np.all(np.isfinite(est))
-
-    def stokes4(S3):  # linear Stokes (3, H, W) -> (H, W, 4), axis last, S3 = 0
-        return np.moveaxis(np.concatenate([S3, np.zeros((1,) + S3.shape[1:])]), 0, -1)
-
-    P = dolp(stokes4(S))  # the convention: NaN exactly where there is no light, in [0, 1] elsewhere
-    dark = S[0] == 0
+    P = dolp(S)  # the convention: NaN exactly where there is no light, in [0, 1] elsewhere
+    dark = S[..., 0] == 0
     assert np.all(np.isnan(P[dark])) and np.all((P[~dark] >= 0) & (P[~dark] <= 1))
-    P_est = dolp(stokes4(est))  # noisy estimates: NaN or finite, never inf
+    P_est = dolp(est)  # noisy estimates: NaN or finite, never inf
     assert not np.any(np.isinf(P_est))
 
 

@@ -155,6 +155,7 @@ def acquire(
         phase_screen,
         render_stokes,
     )
+    from scatterlab.polarization import signed_dolp
 
     labels = np.asarray(labels)
     H, W = labels.shape
@@ -188,8 +189,7 @@ def acquire(
     from scatterlab.deconvolution import resample_psf
 
     psf_true = resample_psf(h_wide, (H, W))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        truth_dolp = np.where(S_obj[0] > 0, S_obj[1] / S_obj[0], np.nan)
+    truth_dolp = signed_dolp(S_obj)  # S1 / S0 (the AOP is fixed at 0), NaN where S0 = 0
     return Acquisition(
         theta=float(theta),
         case=case,
@@ -198,7 +198,7 @@ def acquire(
         angles=angles,
         psf_true=psf_true,
         pupil=pupil,
-        truth_s0=S_obj[0],
+        truth_s0=S_obj[..., 0],
         truth_dolp=truth_dolp,
         foreshortened=not ideal.foreshortening,
     )

@@ -100,10 +100,11 @@ class RestoreSettings:
 
 
 def signed_dolp(S) -> np.ndarray:
-    """DOLP ``S1/S0`` of linear Stokes images ``(3, H, W)`` with the AOP fixed at 0; NaN where ``S0 <= 0``."""
-    s0, s1 = S[0], S[1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(s0 > 0, s1 / s0, np.nan)
+    """DOLP ``S1/S0`` of linear Stokes images ``(H, W, 3)`` with the AOP fixed at 0; NaN where ``S0 <= 0``
+    (:func:`scatterlab.polarization.signed_dolp`)."""
+    from scatterlab import polarization
+
+    return polarization.signed_dolp(S)
 
 
 def degraded(acq: Acquisition, priors=None) -> Restoration:
@@ -114,7 +115,7 @@ def degraded(acq: Acquisition, priors=None) -> Restoration:
     S = stokes_from_channels(acq.counts, acq.angles)
     dolp = signed_dolp(S)
     classes = classify_dolp(np.nan_to_num(dolp, nan=0.0), priors) if priors else None
-    return Restoration("degraded", S[0], dolp, classes)
+    return Restoration("degraded", S[..., 0], dolp, classes)
 
 
 def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int) -> str:

@@ -12,6 +12,7 @@ from scatterlab.imaging.polarimeter import (
     detect,
     dolp_aop_from_stokes,
     stokes_from_channels,
+    stokes_image,
 )
 from scatterlab.imaging.psf import (
     airy_pattern,
@@ -48,6 +49,7 @@ __all__ = [
     "detect",
     "stokes_from_channels",
     "dolp_aop_from_stokes",
+    "stokes_image",
     "ANGLES_0_45_90_135",
     "ANGLES_0_60_120",
     "Scene",

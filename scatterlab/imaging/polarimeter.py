@@ -10,7 +10,14 @@ Capture modes: division of amplitude (one PSF, one turbulence realization, share
 sequential (one PSF per channel; tilt is kept, so the channels are misregistered as in a real sequential
 polarimeter). Noise: a photon budget (expected photo-electrons of the brightest pixel of an unpolarized
 channel), Poisson shot noise, Gaussian read noise and a dark current subtracted with a dark frame.
-Images are ``(H, W)``; channel stacks ``(K, H, W)``; Stokes stacks ``(3, H, W)``.
+Layouts: images are ``(H, W)``; channel stacks ``(K, H, W)`` (one image per polarizer, as a camera
+delivers them); Stokes images ``(H, W, 3)`` -- the Stokes axis last, as everywhere in the package
+(:mod:`scatterlab.polarization`), ``(H, W, 4)`` accepted where Stokes images are read (S3 is invisible to
+linear polarizers). The axis-first ``(3, H, W)`` layout of earlier versions raises a ValueError naming the
+argument (convert with ``numpy.moveaxis(S, 0, -1)``).
+
+DOLP and AOP images: :func:`dolp_aop_from_stokes` wraps :func:`scatterlab.polarization.dolp_aop` (NaN where
+there is no light) and masks those pixels.
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from scatterlab._checks import as_finite
+from scatterlab.polarization import dolp_aop
 
 __all__ = [
     "analyzer_matrix",
@@ -26,6 +34,7 @@ __all__ = [
     "detect",
     "stokes_from_channels",
     "dolp_aop_from_stokes",
+    "stokes_image",
     "ANGLES_0_45_90_135",
     "ANGLES_0_60_120",
 ]
@@ -57,17 +66,53 @@ def convolve(images, psfs) -> np.ndarray:
     return np.fft.irfft2(np.fft.rfft2(images) * H, s=images.shape[-2:])
 
 
-def channel_images(stokes, angles, psfs=None) -> np.ndarray:
-    """Noise-free channel images ``(K, H, W)`` from linear Stokes images ``(3, H, W)`` (Eq. 197).
+def stokes_image(S, name: str = "stokes") -> np.ndarray:
+    """Check and return a linear Stokes image ``(H, W, 3)`` (the S3 plane of ``(H, W, 4)`` is dropped).
 
-    ``psfs``: None (no blur), one ``(H, W)`` PSF shared by all channels (division of amplitude), or ``(K, H, W)``
-    (sequential capture, one realization per channel).
+    Parameters
+    ----------
+    S : array_like, shape ``(H, W, 3)`` or ``(H, W, 4)``, Stokes axis last, finite.
+    name : str
+        Argument name for the error message.
+
+    Returns
+    -------
+    ndarray ``(H, W, 3)`` float.
+
+    Raises
+    ------
+    ValueError
+        Any other shape, in particular the old axis-first ``(3, H, W)``, or non-finite values.
     """
-    S = as_finite(stokes, "stokes")
-    if S.ndim != 3 or S.shape[0] != 3:
-        raise ValueError(f"stokes must have shape (3, H, W), got {S.shape}")
+    S = as_finite(S, name)
+    if S.ndim == 3 and S.shape[-1] in (3, 4):
+        return S[..., :3]
+    hint = ""
+    if S.ndim == 3 and S.shape[0] in (3, 4):
+        hint = " (the axis-first (3, H, W) layout is gone: use numpy.moveaxis(S, 0, -1))"
+    raise ValueError(
+        f"{name} must be a Stokes image of shape (H, W, 3) with the Stokes axis last, "
+        f"got {S.shape}{hint}"
+    )
+
+
+def channel_images(stokes, angles, psfs=None) -> np.ndarray:
+    """Noise-free channel images from linear Stokes images (Eq. 197).
+
+    Parameters
+    ----------
+    stokes : array_like ``(H, W, 3)`` (or ``(H, W, 4)``), Stokes axis last [any intensity unit].
+    angles : array_like ``(K,)`` [rad], polarizer angles from the s axis.
+    psfs : None (no blur), one ``(H, W)`` PSF shared by all channels (division of amplitude), or
+        ``(K, H, W)`` (sequential capture, one realization per channel); centred, unit sum.
+
+    Returns
+    -------
+    ndarray ``(K, H, W)``: ``0.5 (S0 + S1 cos 2a_k + S2 sin 2a_k)`` blurred by the PSF(s).
+    """
+    S = stokes_image(stokes, "stokes")
     P = analyzer_matrix(angles)
-    I = np.einsum("ks,shw->khw", P, S)
+    I = np.einsum("ks,hws->khw", P, S)
     if psfs is None:
         return I
     psfs = as_finite(psfs, "psfs")
@@ -129,26 +174,43 @@ def detect(
 
 
 def stokes_from_channels(channels, angles) -> np.ndarray:
-    """Least-squares linear Stokes images ``(3, H, W)`` from channel images ``(K, H, W)`` (Eqs. 99, 197)."""
+    """Least-squares linear Stokes images from channel images (Eqs. 99, 197).
+
+    Parameters
+    ----------
+    channels : array_like ``(K, H, W)`` [counts or intensity], one image per polarizer.
+    angles : array_like ``(K,)`` [rad].
+
+    Returns
+    -------
+    ndarray ``(H, W, 3)``: (S0, S1, S2) with the Stokes axis last, same unit as ``channels``.
+    """
     I = as_finite(channels, "channels")
     P = analyzer_matrix(angles)
-    if I.shape[0] != P.shape[0]:
-        raise ValueError(f"channels has {I.shape[0]} images but angles has {P.shape[0]}")
-    return np.einsum("sk,khw->shw", np.linalg.pinv(P), I)
+    if I.ndim != 3 or I.shape[0] != P.shape[0]:
+        raise ValueError(
+            f"channels must have shape (K, H, W) with K = {P.shape[0]} (one image per angle), "
+            f"got {I.shape}"
+        )
+    return np.einsum("sk,khw->hws", np.linalg.pinv(P), I)
 
 
 def dolp_aop_from_stokes(S, *, min_intensity: float = 0.0):
-    """DOLP and AOP images from Stokes ``(3, H, W)``; pixels with ``S0 <= min_intensity`` are masked.
+    """DOLP and AOP images from Stokes images, masked where there is no light.
+
+    Calls :func:`scatterlab.polarization.dolp_aop` (the package's one DOLP rule: NaN where
+    ``S0 <= min_intensity``) and masks the undefined pixels.
+
+    Parameters
+    ----------
+    S : array_like ``(H, W, 3)`` (or ``(H, W, 4)``), Stokes axis last.
+    min_intensity : float, ``>= 0``, same unit as ``S``.
 
     Returns
     -------
     dolp, aop : masked arrays ``(H, W)`` (AOP in (-pi/2, pi/2] [rad]); DOLP is not clipped, so noise can
-    push it above 1 -- an honest estimate, not a bounded one.
+    push it above 1 -- an honest estimate, not a bounded one. The AOP is masked also where
+    ``S1 = S2 = 0``.
     """
-    S = as_finite(S, "S")
-    s0, s1, s2 = S
-    bad = s0 <= min_intensity
-    with np.errstate(divide="ignore", invalid="ignore"):
-        dolp = np.hypot(s1, s2) / np.where(bad, 1.0, s0)
-    aop = 0.5 * np.arctan2(s2, s1)
-    return np.ma.masked_array(dolp, bad), np.ma.masked_array(aop, bad | ((s1 == 0) & (s2 == 0)))
+    dolp, aop = dolp_aop(stokes_image(S, "S"), min_intensity=min_intensity)
+    return np.ma.masked_invalid(dolp), np.ma.masked_invalid(aop)

@@ -126,12 +126,22 @@ def painted_plate(
 def render_stokes(
     scene: Scene, *, shadowing: str = "torrance-sparrow", diffuse: str = "hyde"
 ) -> np.ndarray:
-    """Linear Stokes images ``(3, H, W)`` [1/sr per unit incident irradiance] of ``scene`` (unpolarized light).
+    """Linear Stokes images of ``scene`` for unpolarized illumination.
 
     In the specular plane (``phi == pi``) uses the closed form (S2 = 0); otherwise the first column of the
     Mueller pBRDF. One evaluation per material label.
+
+    Parameters
+    ----------
+    scene : Scene
+    shadowing, diffuse : str
+        Passed to :class:`scatterlab.pbrdf.Model`.
+
+    Returns
+    -------
+    ndarray ``(H, W, 3)`` [1/sr per unit incident irradiance]: (S0, S1, S2), Stokes axis last.
     """
-    out = np.zeros((3,) + scene.labels.shape)
+    out = np.zeros(scene.labels.shape + (3,))
     for k, (eta, sigma) in enumerate(zip(scene.materials, scene.roughness)):
         mask = scene.labels == k
         if not mask.any():
@@ -141,5 +151,5 @@ def render_stokes(
             F = model.mueller(eta, scene.theta_i, scene.theta_r, np.pi)
         else:
             F = model.mueller_linear(eta, scene.theta_i, scene.theta_r, scene.phi)
-        out[:, mask] = F[:3, 0][:, None]
+        out[mask] = F[:3, 0]
     return out

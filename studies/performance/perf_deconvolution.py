@@ -30,7 +30,7 @@ def two_material_scene(n, rng):
         lab[r : r + n // 6, c : c + n // 8] = 1
     s0 = np.where(lab == 1, 2.0, 1.0)
     P = np.where(lab == 1, 0.05, 0.6)
-    return np.stack([s0, P * s0, np.zeros_like(s0)]), P
+    return np.stack([s0, P * s0, np.zeros_like(s0)], axis=-1), P
 
 
 def run(ctx):
@@ -47,7 +47,7 @@ def run(ctx):
             t0 = time.perf_counter()
             res = blind_deconvolve(counts, ANGLES_0_45_90_135, iterations=it, psf_radius=n / 8)
             secs = time.perf_counter() - t0
-            s0 = S[0] * res.s0.mean() / S[0].mean()
+            s0 = S[..., 0] * res.s0.mean() / S[..., 0].mean()
             rows.append(
                 {
                     "iterations": it,

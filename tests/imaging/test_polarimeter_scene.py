@@ -23,7 +23,7 @@ def random_stokes(rng, shape=(16, 16)):
     s0 = rng.uniform(0.5, 2.0, shape)
     p = rng.uniform(0, 1, shape)
     a = rng.uniform(-np.pi / 2, np.pi / 2, shape)
-    return np.stack([s0, s0 * p * np.cos(2 * a), s0 * p * np.sin(2 * a)])
+    return np.stack([s0, s0 * p * np.cos(2 * a), s0 * p * np.sin(2 * a)], axis=-1)  # (H, W, 3)
 
 
 @pytest.mark.parametrize("angles", [ANGLES_0_45_90_135, ANGLES_0_60_120])
@@ -33,7 +33,7 @@ def test_stokes_estimation_exact_without_noise(angles, rng):
         stokes_from_channels(channel_images(S, angles), angles), S, atol=1e-13
     )
     # Malus: a 0-deg polarizer sees (S0 + S1)/2
-    np.testing.assert_allclose(channel_images(S, angles)[0], (S[0] + S[1]) / 2)
+    np.testing.assert_allclose(channel_images(S, angles)[0], (S[..., 0] + S[..., 1]) / 2)
 
 
 def test_poisson_statistics_and_unbiased_stokes(rng):
@@ -66,13 +66,14 @@ def test_zero_photon_pixels_and_dark_subtraction(rng):
 
 
 def test_division_of_amplitude_keeps_uniform_polarization_sequential_misregisters(rng):
-    S = np.zeros((3, 64, 64))
-    S[0, 16:48, 16:48] = 1.0
-    S[1, 16:48, 16:48] = 0.5
+    S = np.zeros((64, 64, 3))
+    S[16:48, 16:48, 0] = 1.0
+    S[16:48, 16:48, 1] = 0.5
     h = psf(circular_pupil(32, 8), pad=2)
     doa = stokes_from_channels(channel_images(S, ANGLES_0_45_90_135, h), ANGLES_0_45_90_135)
     d, _ = dolp_aop_from_stokes(doa, min_intensity=1e-6)
-    assert np.allclose(d[S[0] > 0][np.abs(doa[0][S[0] > 0] - 1) < 1e-3], 0.5, atol=1e-9)  # interior
+    lit = S[..., 0] > 0
+    assert np.allclose(d[lit][np.abs(doa[..., 0][lit] - 1) < 1e-3], 0.5, atol=1e-9)  # interior
     shifted = np.stack([np.roll(h, k, axis=1) for k in range(4)])  # tilt differs per channel
     seq = stokes_from_channels(channel_images(S, ANGLES_0_45_90_135, shifted), ANGLES_0_45_90_135)
     ds, _ = dolp_aop_from_stokes(seq, min_intensity=1e-3)
@@ -82,7 +83,8 @@ def test_division_of_amplitude_keeps_uniform_polarization_sequential_misregister
 def test_scene_rendering_matches_the_pbrdf_and_leaves_out_aop():
     scene = painted_plate(64, rng=1)
     S = render_stokes(scene)
-    assert np.all(S[2] == 0)  # specular plane: S2 = 0, AOP fixed
+    assert S.shape == scene.labels.shape + (3,)
+    assert np.all(S[..., 2] == 0)  # specular plane: S2 = 0, AOP fixed
     dolp, _ = dolp_aop_from_stokes(S)
     for k, (eta, sigma) in enumerate(zip(scene.materials, scene.roughness)):
         expected = Model(sigma).dolp(eta, scene.theta_i, scene.theta_r)
@@ -94,7 +96,7 @@ def test_bad_input(rng):
     with pytest.raises(ValueError, match="angles"):
         stokes_from_channels(np.ones((2, 4, 4)), np.radians([0, 90]))
     with pytest.raises(ValueError, match="stokes"):
-        channel_images(np.full((3, 4, 4), np.nan), ANGLES_0_45_90_135)
+        channel_images(np.full((4, 4, 3), np.nan), ANGLES_0_45_90_135)
     with pytest.raises(ValueError, match="psf"):
         convolve(np.ones((8, 8)), np.ones((4, 4)))
     with pytest.raises(ValueError, match="non-negative"):
@@ -103,3 +105,29 @@ def test_bad_input(rng):
         from scatterlab.imaging import Scene
 
         Scene(np.full((4, 4), 3), [1.5], [0.3], 0.5, 0.5)
+
+
+def test_axis_first_stokes_images_are_refused_with_the_expected_shape(rng):
+    """The old (3, H, W) layout raises a ValueError naming the argument and the (H, W, 3) layout."""
+    S = random_stokes(rng, (8, 10))
+    with pytest.raises(ValueError, match=r"stokes must be a Stokes image of shape \(H, W, 3\)"):
+        channel_images(np.moveaxis(S, -1, 0), ANGLES_0_45_90_135)
+    with pytest.raises(ValueError, match=r"S must .*\(H, W, 3\).*moveaxis"):
+        dolp_aop_from_stokes(np.moveaxis(S, -1, 0))
+    # (H, W, 4) is read as its linear block: S3 is invisible to linear polarizers
+    S4 = np.concatenate([S, 0.1 * S[..., :1]], axis=-1)
+    np.testing.assert_array_equal(
+        channel_images(S4, ANGLES_0_45_90_135), channel_images(S, ANGLES_0_45_90_135)
+    )
+
+
+def test_dolp_images_follow_the_package_rule(rng):
+    """dolp_aop_from_stokes is scatterlab.polarization.dolp / aop with NaN pixels masked."""
+    from scatterlab.polarization import aop, dolp
+
+    S = random_stokes(rng, (6, 6))
+    S[0, 0] = 0.0
+    d, a = dolp_aop_from_stokes(S, min_intensity=0.6)
+    np.testing.assert_array_equal(d.filled(np.nan), dolp(S, min_intensity=0.6))
+    np.testing.assert_array_equal(a.filled(np.nan), aop(S, min_intensity=0.6))
+    assert d.mask[0, 0] and np.array_equal(d.mask, ~(S[..., 0] > 0.6))
