@@ -10,9 +10,19 @@
 from scatterlab.deconvolution.classify import classification_errors, classify_dolp
 from scatterlab.deconvolution.em import (
     DeconvolutionResult,
+    EMOptions,
+    EMState,
+    PolarizationOptions,
+    PSFOptions,
+    StartOptions,
+    StopOptions,
+    WindowOptions,
     blind_deconvolve,
+    e_step,
     evenly_spaced,
+    m_step,
     object_grid,
+    psf_step,
 )
 from scatterlab.deconvolution.priors import (
     PRIOR_SETS,
@@ -27,6 +37,16 @@ from scatterlab.deconvolution.psf_update import gerchberg_saxton, initial_psf, r
 __all__ = [
     "blind_deconvolve",
     "DeconvolutionResult",
+    "EMOptions",
+    "EMState",
+    "PSFOptions",
+    "PolarizationOptions",
+    "WindowOptions",
+    "StartOptions",
+    "StopOptions",
+    "e_step",
+    "m_step",
+    "psf_step",
     "evenly_spaced",
     "SuperGaussianPrior",
     "PRIOR_SETS",

@@ -47,19 +47,45 @@ act on those (:class:`_StokesBasis`); otherwise channel by channel.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 import scipy.fft as sfft
 
 from scatterlab.deconvolution.priors import dolp_update, map_objective
 from scatterlab.deconvolution.psf_update import gerchberg_saxton, resample_psf
+from scatterlab.polarization import dolp as stokes_dolp
+from scatterlab.polarization import signed_dolp
 
-__all__ = ["blind_deconvolve", "DeconvolutionResult", "evenly_spaced", "object_grid"]
+__all__ = [
+    "blind_deconvolve",
+    "DeconvolutionResult",
+    "EMOptions",
+    "EMState",
+    "PSFOptions",
+    "PolarizationOptions",
+    "StartOptions",
+    "StopOptions",
+    "WindowOptions",
+    "e_step",
+    "m_step",
+    "psf_step",
+    "evenly_spaced",
+    "object_grid",
+]
 
 
 def evenly_spaced(angles) -> bool:
-    """True when the polarizer angles are evenly spaced over 180 deg (mod 180), K >= 3."""
+    """True when the polarizer angles are evenly spaced over 180 deg (mod 180), K >= 3.
+
+    Parameters
+    ----------
+    angles : array_like ``(K,)`` [rad]
+
+    Returns
+    -------
+    bool
+    """
     a = np.sort(np.mod(np.asarray(angles, float), np.pi))
     K = a.size
     if K < 3:
@@ -68,11 +94,169 @@ def evenly_spaced(angles) -> bool:
     return bool(np.allclose(d, np.pi / K, atol=1e-9))
 
 
+# ---------------------------------------------------------------------------------------------------------
+# options: small groups of the keyword arguments of blind_deconvolve
+
+
+@dataclass(frozen=True)
+class PSFOptions:
+    """How the PSFs are modelled and updated.
+
+    Parameters
+    ----------
+    mode : "em" (Eq. 194, non-parametric), "pupil" (Schulz's pupil-phase model, Gerchberg-Saxton projection,
+        Eqs. 146-150) or "fixed" (known PSF ``psf0``: the object update is Richardson-Lucy).
+    shared : one PSF for all channels (division of amplitude) or one per channel (sequential capture).
+    radius : PSF support radius [pixels]; None: a quarter of the smaller data side.
+    gs_steps : Gerchberg-Saxton steps per iteration (``mode="pupil"``).
+    """
+
+    mode: str = "em"
+    shared: bool = True
+    radius: float | None = None
+    gs_steps: int = 5
+
+
+@dataclass(frozen=True)
+class PolarizationOptions:
+    """The polarization model of the object.
+
+    Parameters
+    ----------
+    aop : float or array ``(H, W)`` [rad], optional -- the AOP when the geometry fixes it (None means 0:
+        unpolarized light observed in the specular plane, Ch. VII); the start when ``estimate_aop`` (None:
+        the AOP of the least-squares Stokes images of the data).
+    estimate_aop : estimate a per-pixel AOP (LeMaster and Cain's M-step, Sec. 3.3.2) instead of keeping
+        ``aop`` -- for geometries that do not fix it (off the specular plane, polarized sources).
+    priors : tuple of SuperGaussianPrior, optional -- one: MAP DOLP; several: per-pixel classification.
+    prior_weight : weight of the log prior (>= 0).
+    """
+
+    aop: object = None
+    estimate_aop: bool = False
+    priors: tuple | None = None
+    prior_weight: float = 1.0
+
+
+@dataclass(frozen=True)
+class WindowOptions:
+    """Which pixels enter the likelihood.
+
+    Parameters
+    ----------
+    boundary : "reeves" (object on a grid ``pad`` pixels larger on each side, no wrap-around) or "periodic".
+    pad : Reeves padding [pixels]; None: the PSF radius.
+    mask : bool array ``(H, W)``, optional -- pixels to use (False: saturated, dead, ...).
+    saturation : float, optional [photo-electrons] -- pixels where any channel reaches it are masked too.
+    """
+
+    boundary: str = "reeves"
+    pad: int | None = None
+    mask: object = None
+    saturation: float | None = None
+
+
+@dataclass(frozen=True)
+class StartOptions:
+    """Initial object; None: the least-squares Stokes estimate of the data.
+
+    Parameters
+    ----------
+    s0 : float or array ``(H, W)`` [counts], optional -- the text's start is 1.
+    dolp : float or array ``(H, W)``, optional -- the text's start is 0.5 (a DOLP of 0 stays 0: the
+        unpolarized EM is Richardson-Lucy).
+    """
+
+    s0: object = None
+    dolp: object = None
+
+
+@dataclass(frozen=True)
+class StopOptions:
+    """When to stop: after ``iterations`` or when the relative change of the log-likelihood is <= ``tol``.
+
+    Parameters
+    ----------
+    iterations : int >= 0
+    tol : float, optional
+    callback : callable, optional -- called after every iteration with a :class:`DeconvolutionResult`
+        snapshot (data grid), e.g. to record the convergence; it cannot change the run.
+    """
+
+    iterations: int = 50
+    tol: float | None = None
+    callback: object = None
+
+
+@dataclass(frozen=True)
+class EMOptions:
+    """All options of :func:`blind_deconvolve`, grouped.
+
+    Parameters
+    ----------
+    psf, polarization, window, start, stop : the option groups (defaults: the text's settings).
+    update_object : False keeps S0 and the DOLP at their start (PSF-only updates).
+    """
+
+    psf: PSFOptions = field(default_factory=PSFOptions)
+    polarization: PolarizationOptions = field(default_factory=PolarizationOptions)
+    window: WindowOptions = field(default_factory=WindowOptions)
+    start: StartOptions = field(default_factory=StartOptions)
+    stop: StopOptions = field(default_factory=StopOptions)
+    update_object: bool = True
+
+
+# the flat keyword arguments of earlier versions -> (group, field)
+_KEYWORDS = {
+    "psf_mode": ("psf", "mode"),
+    "shared_psf": ("psf", "shared"),
+    "psf_radius": ("psf", "radius"),
+    "gs_steps": ("psf", "gs_steps"),
+    "aop": ("polarization", "aop"),
+    "estimate_aop": ("polarization", "estimate_aop"),
+    "priors": ("polarization", "priors"),
+    "prior_weight": ("polarization", "prior_weight"),
+    "boundary": ("window", "boundary"),
+    "pad": ("window", "pad"),
+    "mask": ("window", "mask"),
+    "saturation": ("window", "saturation"),
+    "s0_start": ("start", "s0"),
+    "dolp_start": ("start", "dolp"),
+    "iterations": ("stop", "iterations"),
+    "tol": ("stop", "tol"),
+    "callback": ("stop", "callback"),
+}
+
+
+def _resolve_options(options, keywords) -> EMOptions:
+    """``options`` (or the defaults) with the flat keywords applied on top."""
+    opts = EMOptions() if options is None else options
+    if not isinstance(opts, EMOptions):
+        raise TypeError(f"options must be an EMOptions, got {type(opts).__name__}")
+    groups = {f.name: getattr(opts, f.name) for f in fields(opts)}
+    for key, value in keywords.items():
+        if key == "update_object":
+            groups["update_object"] = value
+            continue
+        if key not in _KEYWORDS:
+            raise TypeError(f"blind_deconvolve() got an unexpected keyword argument {key!r}")
+        group, name = _KEYWORDS[key]
+        groups[group] = replace(groups[group], **{name: value})
+    return EMOptions(**groups)
+
+
 @dataclass
 class DeconvolutionResult:
-    """Estimates on the data grid: s0, dolp, aop (H, W); psfs (K or 1, Hp, Wp) on the object grid (centred);
-    classes (H, W) int index into ``priors`` (or None); loglik (iterations + 1,) Poisson log-likelihood;
-    objective (with the log priors); iterations; notes; seconds."""
+    """Estimates on the data grid.
+
+    Attributes
+    ----------
+    s0, dolp, aop : arrays ``(H, W)`` [counts, -, rad]
+    psfs : array ``(K or 1, Hp, Wp)`` on the object grid (centred, unit sum)
+    classes : int array ``(H, W)`` (index into ``priors``) or None
+    loglik : array ``(iterations + 1,)`` Poisson log-likelihood; objective: with the log priors
+    iterations : int; notes : list of str; seconds : float [s]
+    """
 
     s0: np.ndarray
     dolp: np.ndarray
@@ -130,57 +314,65 @@ def _pad_edge(a, pad):
     return np.pad(a, [(0, 0)] * (a.ndim - 2) + [(pad, pad), (pad, pad)], mode="edge") if pad else a
 
 
-def blind_deconvolve(
-    data,
-    angles,
-    *,
-    psf0=None,
-    pupil=None,
-    psf_mode: str = "em",
-    shared_psf: bool = True,
-    priors: tuple | None = None,
-    prior_weight: float = 1.0,
-    aop=0.0,
-    estimate_aop: bool = False,
-    iterations: int = 50,
-    tol: float | None = None,
-    psf_radius: float | None = None,
-    boundary: str = "reeves",
-    pad: int | None = None,
-    gs_steps: int = 5,
-    update_object: bool = True,
-    s0_start=None,
-    dolp_start=None,
-    mask=None,
-    saturation: float | None = None,
-) -> DeconvolutionResult:
-    """Blind deconvolution of polarimetric channel images.
+# ---------------------------------------------------------------------------------------------------------
+# the problem (fixed during the iterations) and the state (updated every iteration)
 
-    Parameters
+
+@dataclass
+class _Problem:
+    """What the iterations read but never change: data, angles, measured pixels, FFT operators, PSF
+    support, forward model, options."""
+
+    d: np.ndarray  # (K, H, W) clipped, masked counts
+    th: np.ndarray  # (K,) [rad]
+    valid: np.ndarray  # (H, W) bool
+    ops: _Ops
+    support: np.ndarray  # (Hp, Wp) bool
+    D: np.ndarray  # (K,) total counts per channel
+    model: object  # _StokesBasis or _PerChannel
+    opts: EMOptions
+    pupil: np.ndarray | None
+    notes: list
+
+    @property
+    def priors(self) -> tuple:
+        return tuple(self.opts.polarization.priors) if self.opts.polarization.priors else ()
+
+    def likelihood(self, i) -> float:
+        """Poisson log-likelihood sum(d ln i - i) over the measured pixels."""
+        # d ln i - i; where d = 0 the clipped log is finite, so the product is exactly 0
+        predicted = float(np.sum(i * self.valid)) if self.ops.masked else float(i.sum())
+        return float(np.vdot(self.d, np.log(np.maximum(i, 1e-300)))) - predicted
+
+
+@dataclass
+class EMState:
+    """The evolving estimate of :func:`blind_deconvolve` on the object grid ``(Hp, Wp)``.
+
+    Attributes
     ----------
-    data : array (K, H, W) [photo-electrons] -- negative values (read noise after dark subtraction) are
-        clipped at 0 for the Poisson model; NaN is not allowed (use 0 and it contributes nothing).
-    angles : array (K,) [rad] -- polarizer angles.
-    psf0 : array (Hp, Wp) or (K, Hp, Wp) on the object grid, optional -- initial or known PSF (centred).
-    pupil : array (n, n), optional -- aperture for ``psf_mode="pupil"`` and the diffraction-limited start.
-    psf_mode : "em", "pupil" or "fixed"
-    shared_psf : one PSF for all channels (division of amplitude) or one per channel.
-    priors : tuple of SuperGaussianPrior, optional -- one: MAP DOLP; several: per-pixel classification.
-    aop : float or array (H, W) [rad] -- fixed AOP (0 for specular observation); start when ``estimate_aop``.
-    iterations, tol : stop after ``iterations`` or when the relative change of the log-likelihood < ``tol``.
-    psf_radius : PSF support radius [pixels] (default: a quarter of the smaller object side).
-    boundary : "reeves" or "periodic"; pad : Reeves padding (default psf_radius).
-    s0_start, dolp_start : float or (H, W), optional -- initial S0 [counts] and DOLP instead of the Stokes
-        estimates of the data (a DOLP of 0 stays 0: the unpolarized EM is Richardson-Lucy).
-    mask : bool array (H, W), optional -- pixels to use (False: saturated, dead, ...); they leave the
-        likelihood as the Reeves border does, and the object there is estimated from its neighbours' light.
-    saturation : float, optional [photo-electrons] -- pixels where any channel reaches it are masked too.
-
-    Returns
-    -------
-    DeconvolutionResult
+    h : array ``(K or 1, Hp, Wp)`` -- PSFs (centred, unit sum)
+    s0, P : arrays ``(Hp, Wp)`` -- S0 [counts] and DOLP
+    pred : predicted channel images ``(K, H, W)`` with the OTFs and object spectra (``_State``)
+    w : window share ``h^T * 1_window`` (array or 1.0)
+    pupil_phase : array ``(K or 1, n, n)`` [rad] or None (``mode="pupil"``)
+    classes : int array ``(H, W)`` or None
+    loglik, objective : lists of floats, one per iteration (plus the start)
     """
-    t0 = time.perf_counter()
+
+    h: np.ndarray
+    s0: np.ndarray
+    P: np.ndarray
+    pred: object
+    w: object
+    pupil_phase: np.ndarray | None
+    classes: np.ndarray | None = None
+    loglik: list = field(default_factory=list)
+    objective: list = field(default_factory=list)
+
+
+def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
+    """Validate the data, angles and options; return the data (K, H, W) and the angles (K,)."""
     d = np.asarray(data, float)
     if d.ndim != 3:
         raise ValueError(f"data must have shape (K, H, W), got {d.shape}")
@@ -190,48 +382,49 @@ def blind_deconvolve(
     K = d.shape[0]
     if th.size != K:
         raise ValueError(f"angles has {th.size} entries for {K} channels")
-    if psf_mode not in ("em", "pupil", "fixed"):
-        raise ValueError(f"psf_mode must be 'em', 'pupil' or 'fixed', got {psf_mode!r}")
-    if boundary not in ("reeves", "periodic"):
-        raise ValueError(f"boundary must be 'reeves' or 'periodic', got {boundary!r}")
+    mode, radius = opts.psf.mode, opts.psf.radius
+    if mode not in ("em", "pupil", "fixed"):
+        raise ValueError(f"psf_mode must be 'em', 'pupil' or 'fixed', got {mode!r}")
+    if opts.window.boundary not in ("reeves", "periodic"):
+        raise ValueError(f"boundary must be 'reeves' or 'periodic', got {opts.window.boundary!r}")
     if np.any(np.abs(th) > 2 * np.pi):
         raise ValueError(
             f"angles must be polarizer angles in radians, got values up to {np.abs(th).max():g} "
             "(degrees? use numpy.radians)"
         )
-    if not (np.isfinite(prior_weight) and prior_weight >= 0):
-        raise ValueError(f"prior_weight must be finite and >= 0, got {prior_weight!r}")
-    if psf_radius is not None and not (np.isfinite(psf_radius) and psf_radius >= 1):
-        raise ValueError(f"psf_radius must be >= 1 pixel, got {psf_radius!r}")
+    weight = opts.polarization.prior_weight
+    if not (np.isfinite(weight) and weight >= 0):
+        raise ValueError(f"prior_weight must be finite and >= 0, got {weight!r}")
+    if radius is not None and not (np.isfinite(radius) and radius >= 1):
+        raise ValueError(f"psf_radius must be >= 1 pixel, got {radius!r}")
     if psf0 is not None:
         p0 = np.asarray(psf0, float)
         if not np.all(np.isfinite(p0)) or np.any(p0 < 0) or not np.all(p0.sum(axis=(-2, -1)) > 0):
             raise ValueError("psf0 must be finite and non-negative with a positive sum (a PSF)")
-    if psf_mode == "fixed" and psf0 is None:
+    if mode == "fixed" and psf0 is None:
         raise ValueError("psf_mode='fixed' needs psf0")
-    if psf_mode == "pupil" and pupil is None:
+    if mode == "pupil" and pupil is None:
         raise ValueError("psf_mode='pupil' needs the pupil (aperture) array")
-    notes = []
-    if not evenly_spaced(th):
-        notes.append(
-            "polarizer angles are not evenly spaced: the S0/DOLP updates are generalised-EM steps "
-            "(coupled updates of Sec. 3.3.2)"
-        )
+    return d, th
+
+
+def _valid_pixels(d, window: WindowOptions, notes):
+    """Clip the data at 0 and mask it; return (data, valid (H, W) bool)."""
     d = np.clip(d, 0.0, None)
     if not d.sum() > 0:
         raise ValueError("data holds no photons (every count is <= 0): nothing to deconvolve")
     valid = np.ones(d.shape[1:], bool)
-    if mask is not None:
-        m = np.asarray(mask)
+    if window.mask is not None:
+        m = np.asarray(window.mask)
         if m.shape != d.shape[1:] or m.dtype != bool:
             raise ValueError(
                 f"mask must be a boolean array of shape {d.shape[1:]}, got {m.dtype} {m.shape}"
             )
         valid &= m
-    if saturation is not None:
-        if not saturation > 0:
-            raise ValueError(f"saturation must be > 0 photo-electrons, got {saturation}")
-        valid &= np.all(d < saturation, axis=0)
+    if window.saturation is not None:
+        if not window.saturation > 0:
+            raise ValueError(f"saturation must be > 0 photo-electrons, got {window.saturation}")
+        valid &= np.all(d < window.saturation, axis=0)
     if not valid.any():
         raise ValueError("mask and saturation leave no pixel to use")
     if not valid.all():
@@ -239,169 +432,283 @@ def blind_deconvolve(
             f"{int((~valid).sum())} masked pixels (saturated or excluded) left out of the likelihood"
         )
         d = d * valid
-    H, W = d.shape[1:]
-    if psf_radius is None:
-        psf_radius = min(H, W) / 4
-    if pad is None:
-        pad = int(np.ceil(psf_radius)) if boundary == "reeves" else 0
-    ops = _Ops((H, W), pad, boundary, valid)
-    Hp, Wp = ops.shape
-    yy, xx = np.mgrid[0:Hp, 0:Wp]
-    support = np.hypot(yy - Hp // 2, xx - Wp // 2) <= psf_radius
+    return d, valid
 
-    # PSFs
-    nps = 1 if shared_psf else K
+
+def _initial_psfs(psf0, pupil, ops: _Ops, support, radius, nps):
+    """Start PSFs (nps, Hp, Wp): ``psf0``, else the diffraction-limited PSF of ``pupil``, else a Gaussian
+    of standard deviation radius / 4; confined to the support, unit sum."""
+    Hp, Wp = ops.shape
     if psf0 is not None:
         h = np.asarray(psf0, float)
-        h = (
-            np.broadcast_to(h if h.ndim == 3 else h[None], (nps, Hp, Wp)).copy()
-            if h.shape[-2:] == (Hp, Wp)
-            else None
-        )
-        if h is None:
+        if h.shape[-2:] != (Hp, Wp):
             raise ValueError(f"psf0 must be given on the object grid {(Hp, Wp)} (data + 2 pad)")
+        h = np.broadcast_to(h if h.ndim == 3 else h[None], (nps, Hp, Wp)).copy()
     elif pupil is not None:
         from scatterlab.imaging import psf as make_psf
 
         h = np.broadcast_to(resample_psf(make_psf(pupil, pad=2), (Hp, Wp)), (nps, Hp, Wp)).copy()
     else:
-        g = np.exp(-((yy - Hp // 2) ** 2 + (xx - Wp // 2) ** 2) / (2 * (psf_radius / 4) ** 2))
+        yy, xx = np.mgrid[0:Hp, 0:Wp]
+        g = np.exp(-((yy - Hp // 2) ** 2 + (xx - Wp // 2) ** 2) / (2 * (radius / 4) ** 2))
         h = np.broadcast_to(g, (nps, Hp, Wp)).copy()
     h = np.where(support, np.clip(h, 0, None), 0.0)
     h /= h.sum(axis=(-2, -1), keepdims=True)
-    pupil_phase = np.zeros((nps,) + np.shape(pupil)) if psf_mode == "pupil" else None
+    return h
 
-    # initial object: least-squares Stokes images of the data (the text's start, S0 = 1 and P = 1/2, via
-    # s0_start / dolp_start)
+
+def _initial_object(d, th, valid, opts: EMOptions):
+    """Start S0, DOLP and AOP (H, W) from the least-squares Stokes images of the data (or the options).
+
+    EM barely moves a DOLP near 0 (the mixture weight's update is slow at the boundary), so the start must be
+    unbiased there: with the AOP known, :func:`scatterlab.polarization.signed_dolp`, which has no Rician bias
+    (a 0.02 floor left a metal of DOLP 0.005 at 0.012 after 100 iterations); floored at 1e-6 (P = 0 would
+    stay 0). Pixels without light (DOLP NaN) start at that floor, masked pixels at 0.5.
+    """
     from scatterlab.imaging import stokes_from_channels
 
-    S = stokes_from_channels(d, th)
-    s0 = np.clip(S[0], 1e-3 * max(S[0][valid].mean(), 1e-12), None)
-    # EM barely moves a DOLP near 0 (the mixture weight's update is slow at the boundary), so the start must
-    # be unbiased there: with the AOP known, the signed projection (S1 cos 2a + S2 sin 2a)/S0, which has no
-    # Rician bias (a 0.02 floor left a metal of DOLP 0.005 at 0.012 after 100 iterations); floored at 1e-6
-    # (P = 0 would stay 0)
-    if estimate_aop:
-        P_ls = np.hypot(S[1], S[2]) / np.maximum(S[0], 1e-12)
+    H, W = d.shape[1:]
+    pol = opts.polarization
+    S = stokes_from_channels(d, th)  # (H, W, 3)
+    s00 = S[..., 0]
+    s0 = np.clip(s00, 1e-3 * max(s00[valid].mean(), 1e-12), None)
+    aop = 0.0 if pol.aop is None else pol.aop
+    if pol.estimate_aop:
+        P_ls = stokes_dolp(S)
     else:
-        a2 = 2 * np.broadcast_to(np.asarray(aop, float), S[0].shape)
-        P_ls = (S[1] * np.cos(a2) + S[2] * np.sin(a2)) / np.maximum(S[0], 1e-12)
-    P0 = np.clip(P_ls, 1e-6, 0.98)
-    s0 = np.where(valid, s0, S[0][valid].mean())  # masked pixels start from the mean level
+        P_ls = signed_dolp(S, np.broadcast_to(np.asarray(aop, float), (H, W)))
+    P0 = np.clip(np.nan_to_num(P_ls, nan=0.0), 1e-6, 0.98)
+    s0 = np.where(valid, s0, s00[valid].mean())  # masked pixels start from the mean level
     P0 = np.where(valid, P0, 0.5)
-    if s0_start is not None:
-        s0 = np.broadcast_to(np.asarray(s0_start, float), (H, W)).copy()
-    if dolp_start is not None:
-        P0 = np.broadcast_to(np.clip(np.asarray(dolp_start, float), 0, 1), (H, W)).copy()
-    s0 = _pad_edge(s0, ops.pad)
-    P = _pad_edge(P0, ops.pad)
+    if opts.start.s0 is not None:
+        s0 = np.broadcast_to(np.asarray(opts.start.s0, float), (H, W)).copy()
+    if opts.start.dolp is not None:
+        P0 = np.broadcast_to(np.clip(np.asarray(opts.start.dolp, float), 0, 1), (H, W)).copy()
     alpha = np.broadcast_to(np.asarray(aop, float), (H, W)).copy()
-    if estimate_aop:
-        alpha = 0.5 * np.arctan2(S[2], S[1])
-    alpha = _pad_edge(alpha, ops.pad)
+    if pol.estimate_aop and pol.aop is None:
+        alpha = 0.5 * np.arctan2(S[..., 2], S[..., 1])
+    return s0, P0, alpha
 
-    D = d.sum(axis=(-2, -1))
-    classes = None
-    priors = tuple(priors) if priors else ()
-    loglik, objective = [], []
-    # one PSF and a known AOP (Ch. VII's specular case): the channel objects are linear in the Stokes images,
-    # o_n = (S0 + S1 cos 2theta_n + S2 sin 2theta_n) / 2, so 2 (3 if sin 2alpha != 0) transforms replace K
-    # in every convolution, and the PSF update reuses their spectra
-    model = (_StokesBasis if shared_psf and not estimate_aop else _PerChannel)(ops, th, alpha)
 
-    def likelihood(i):
-        # d ln i - i; where d = 0 the clipped log is finite, so the product is exactly 0
-        predicted = float(np.sum(i * valid)) if ops.masked else float(i.sum())
-        return float(np.vdot(d, np.log(np.maximum(i, 1e-300)))) - predicted
+def _setup(data, angles, psf0, pupil, opts: EMOptions):
+    """Validate, build the fixed problem and the start state."""
+    notes = []
+    d, th = _check_inputs(data, angles, psf0, pupil, opts)
+    if not evenly_spaced(th):
+        notes.append(
+            "polarizer angles are not evenly spaced: the S0/DOLP updates are generalised-EM steps "
+            "(coupled updates of Sec. 3.3.2)"
+        )
+    d, valid = _valid_pixels(d, opts.window, notes)
+    H, W = d.shape[1:]
+    radius = min(H, W) / 4 if opts.psf.radius is None else opts.psf.radius
+    pad = opts.window.pad
+    if pad is None:
+        pad = int(np.ceil(radius)) if opts.window.boundary == "reeves" else 0
+    ops = _Ops((H, W), pad, opts.window.boundary, valid)
+    Hp, Wp = ops.shape
+    yy, xx = np.mgrid[0:Hp, 0:Wp]
+    support = np.hypot(yy - Hp // 2, xx - Wp // 2) <= radius
+    nps = 1 if opts.psf.shared else d.shape[0]
+    h = _initial_psfs(psf0, pupil, ops, support, radius, nps)
+    pupil_phase = np.zeros((nps,) + np.shape(pupil)) if opts.psf.mode == "pupil" else None
+    s0, P0, alpha = _initial_object(d, th, valid, opts)
+    s0, P, alpha = (_pad_edge(a, ops.pad) for a in (s0, P0, alpha))
+    # one PSF and a known AOP (Ch. VII's specular case): the channel objects are linear in the Stokes
+    # images, o_n = (S0 + S1 cos 2theta_n + S2 sin 2theta_n) / 2, so 2 (3 if sin 2alpha != 0) transforms
+    # replace K in every convolution, and the PSF update reuses their spectra
+    fast = opts.psf.shared and not opts.polarization.estimate_aop
+    model = (_StokesBasis if fast else _PerChannel)(ops, th, alpha)
+    problem = _Problem(d, th, valid, ops, support, d.sum(axis=(-2, -1)), model, opts, pupil, notes)
+    pred = model.forward(h, s0, P)
+    state = EMState(h, s0, P, pred, ops.window_share(pred.Hf), pupil_phase)
+    state.loglik.append(problem.likelihood(pred.i))
+    state.objective.append(state.loglik[-1])
+    return problem, state
 
-    state = model.forward(h, s0, P)
-    loglik.append(likelihood(state.i))
-    objective.append(loglik[-1])
-    w = ops.window_share(state.Hf)
-    it = 0
-    for it in range(1, iterations + 1):
-        r = np.divide(d, state.i, out=np.zeros_like(d), where=(state.i > 0) & valid)
-        T, Qp, Pp, R = model.estep(state, r, s0, P)
-        if update_object:
-            # S0 = T / sum_n w_n [(1 - P)/2 + P cos^2(alpha - theta_n)], w_n = h_n^T * 1_window the share of an
-            # object pixel's light that reaches the measured window (Reeves; 1 for periodic boundaries)
-            s0_new = T / model.s0_denominator(w, P)
-            P_new = dolp_update(T, Qp)
-            if priors:
-                # the priors classify the measured pixels; the Reeves border (never observed) keeps the ML update
-                Tw, Qw = ops.crop(T), ops.crop(Qp)
-                cands = np.stack([dolp_update(Tw, Qw, pr, prior_weight) for pr in priors])
-                objs = np.stack(
-                    [
-                        map_objective(cands[k], Tw, Qw, pr, prior_weight)
-                        for k, pr in enumerate(priors)
-                    ]
-                )
-                classes = np.argmax(objs, axis=0)
-                P_new[ops.win] = np.take_along_axis(cands, classes[None], 0)[0]
-            if estimate_aop:
-                model.set_aop(_aop_mstep(Pp, th))  # weights of ln cos^2(alpha - theta_n)
-        else:
-            s0_new, P_new = s0, P
-        # PSF update (Eq. 194): h <- h (r * o) / D, per channel or summed for a shared PSF
-        if psf_mode != "fixed":
-            num = sfft.fftshift(model.psf_correlation(state, R), axes=(-2, -1))
-            if shared_psf:
-                h_em = (h[0] * num.sum(0) / D.sum())[None]
-            else:
-                h_em = h * num / D[:, None, None]
-            h_em = np.where(support, np.clip(h_em, 0, None), 0.0)
-            h_em /= np.maximum(h_em.sum(axis=(-2, -1), keepdims=True), 1e-300)
-            if psf_mode == "pupil":
-                h_new, pupil_phase_new = gerchberg_saxton(
-                    h_em, pupil, pupil_phase, (Hp, Wp), gs_steps
-                )
-                h_new = np.where(support, h_new, 0.0)
-                h_new /= h_new.sum(axis=(-2, -1), keepdims=True)
-            else:
-                h_new = h_em
-        else:
-            h_new = h
-        new_state = model.forward(h_new, s0_new, P_new, Hf=state.Hf if h_new is h else None)
-        L_new = likelihood(new_state.i)
-        if psf_mode == "pupil" and L_new < loglik[-1]:
-            # Schulz: the pupil-projected PSF step is kept only if the objective increased
-            h_new = h
-            new_state = model.forward(h, s0_new, P_new, Hf=state.Hf)
-            L_new = likelihood(new_state.i)
-        elif psf_mode == "pupil":
-            pupil_phase = pupil_phase_new
-        if h_new is not h:
-            w = ops.window_share(new_state.Hf)
-        h, s0, P, state = h_new, s0_new, P_new, new_state
-        loglik.append(L_new)
-        obj = L_new
-        if priors:
-            obj += float(
-                np.sum(
-                    [
-                        np.sum(np.where(classes == k, prior_weight * pr.log_pdf(ops.crop(P)), 0.0))
-                        for k, pr in enumerate(priors)
-                    ]
-                )
-            )
-        objective.append(obj)
-        if tol is not None and abs(loglik[-1] - loglik[-2]) <= tol * abs(loglik[-2]):
+
+def e_step(problem: _Problem, state: EMState):
+    """E-step (Eq. 193): back-project the data-to-prediction ratios.
+
+    Parameters
+    ----------
+    problem : the fixed problem of :func:`blind_deconvolve`
+    state : EMState
+
+    Returns
+    -------
+    T : ``(Hp, Wp)`` expected photons from each object pixel; Qp : ``(Hp, Wp)`` their polarized part;
+    Pp : ``(K, Hp, Wp)`` per-channel polarized part (None on the Stokes fast path); R : ratio spectra
+    """
+    i = state.pred.i
+    r = np.divide(problem.d, i, out=np.zeros_like(problem.d), where=(i > 0) & problem.valid)
+    return problem.model.estep(state.pred, r, state.s0, state.P)
+
+
+def m_step(problem: _Problem, state: EMState, T, Qp, Pp):
+    """M-step (Eq. 194, with the MAP DOLP of Eq. 196): new S0 and DOLP ``(Hp, Wp)``.
+
+    Sets ``state.classes`` when several priors are given, and the AOP of the forward model when it is
+    estimated.
+
+    Parameters
+    ----------
+    problem, state : as for :func:`e_step`; T, Qp, Pp : its outputs
+
+    Returns
+    -------
+    s0_new, P_new : arrays ``(Hp, Wp)``
+    """
+    if not problem.opts.update_object:
+        return state.s0, state.P
+    ops, model, priors = problem.ops, problem.model, problem.priors
+    weight = problem.opts.polarization.prior_weight
+    # S0 = T / sum_n w_n [(1 - P)/2 + P cos^2(alpha - theta_n)], w_n = h_n^T * 1_window the share of an
+    # object pixel's light that reaches the measured window (Reeves; 1 for periodic boundaries)
+    s0_new = T / model.s0_denominator(state.w, state.P)
+    P_new = dolp_update(T, Qp)
+    if priors:
+        # the priors classify the measured pixels; the Reeves border (never observed) keeps the ML update
+        Tw, Qw = ops.crop(T), ops.crop(Qp)
+        cands = np.stack([dolp_update(Tw, Qw, pr, weight) for pr in priors])
+        objs = np.stack(
+            [map_objective(cands[k], Tw, Qw, pr, weight) for k, pr in enumerate(priors)]
+        )
+        state.classes = np.argmax(objs, axis=0)
+        P_new[ops.win] = np.take_along_axis(cands, state.classes[None], 0)[0]
+    if problem.opts.polarization.estimate_aop:
+        model.set_aop(_aop_mstep(Pp, problem.th))  # weights of ln cos^2(alpha - theta_n)
+    return s0_new, P_new
+
+
+def psf_step(problem: _Problem, state: EMState, R):
+    """PSF update (Eq. 194): ``h <- h (r * o) / D``, per channel or summed for a shared PSF, confined to
+    the support; with ``mode="pupil"`` projected on the pupil model by Gerchberg-Saxton steps.
+
+    Parameters
+    ----------
+    problem, state : as for :func:`e_step`; R : the ratio spectra from :func:`e_step`
+
+    Returns
+    -------
+    h_new : ``(K or 1, Hp, Wp)`` (``state.h`` itself when the PSF is fixed); pupil_phase : new pupil phases
+    or None
+    """
+    popt, h, D, support = problem.opts.psf, state.h, problem.D, problem.support
+    if popt.mode == "fixed":
+        return h, None
+    num = sfft.fftshift(problem.model.psf_correlation(state.pred, R), axes=(-2, -1))
+    if popt.shared:
+        h_em = (h[0] * num.sum(0) / D.sum())[None]
+    else:
+        h_em = h * num / D[:, None, None]
+    h_em = np.where(support, np.clip(h_em, 0, None), 0.0)
+    h_em /= np.maximum(h_em.sum(axis=(-2, -1), keepdims=True), 1e-300)
+    if popt.mode != "pupil":
+        return h_em, None
+    h_new, phase = gerchberg_saxton(
+        h_em, problem.pupil, state.pupil_phase, problem.ops.shape, popt.gs_steps
+    )
+    h_new = np.where(support, h_new, 0.0)
+    h_new /= h_new.sum(axis=(-2, -1), keepdims=True)
+    return h_new, phase
+
+
+def _accept(problem: _Problem, state: EMState, s0_new, P_new, h_new, phase_new):
+    """Move the state to the new estimate; Schulz: a pupil-projected PSF step is kept only if the
+    log-likelihood increased. Records the log-likelihood and the objective."""
+    model, h = problem.model, state.h
+    pred = model.forward(h_new, s0_new, P_new, Hf=state.pred.Hf if h_new is h else None)
+    L_new = problem.likelihood(pred.i)
+    if problem.opts.psf.mode == "pupil" and L_new < state.loglik[-1]:
+        h_new = h
+        pred = model.forward(h, s0_new, P_new, Hf=state.pred.Hf)
+        L_new = problem.likelihood(pred.i)
+    elif problem.opts.psf.mode == "pupil":
+        state.pupil_phase = phase_new
+    if h_new is not h:
+        state.w = problem.ops.window_share(pred.Hf)
+    state.h, state.s0, state.P, state.pred = h_new, s0_new, P_new, pred
+    state.loglik.append(L_new)
+    state.objective.append(L_new + _log_prior(problem, state))
+
+
+def _log_prior(problem: _Problem, state: EMState) -> float:
+    """Sum over pixels of the weighted log prior of each pixel's class (0 without priors)."""
+    if not problem.priors:
+        return 0.0
+    weight, P = problem.opts.polarization.prior_weight, problem.ops.crop(state.P)
+    return float(
+        np.sum(
+            [
+                np.sum(np.where(state.classes == k, weight * pr.log_pdf(P), 0.0))
+                for k, pr in enumerate(problem.priors)
+            ]
+        )
+    )
+
+
+def blind_deconvolve(
+    data, angles, *, psf0=None, pupil=None, options: EMOptions | None = None, **keywords
+) -> DeconvolutionResult:
+    """Blind deconvolution of polarimetric channel images (EM, Eqs. 185-196).
+
+    The options come grouped in ``options`` (:class:`EMOptions`) or as the flat keywords of earlier
+    versions, applied on top of ``options``: ``psf_mode``, ``shared_psf``, ``psf_radius``, ``gs_steps``
+    (:class:`PSFOptions`); ``aop``, ``estimate_aop``, ``priors``, ``prior_weight``
+    (:class:`PolarizationOptions`); ``boundary``, ``pad``, ``mask``, ``saturation`` (:class:`WindowOptions`);
+    ``s0_start``, ``dolp_start`` (:class:`StartOptions`); ``iterations``, ``tol``, ``callback``
+    (:class:`StopOptions`);
+    ``update_object``. Each iteration is :func:`e_step`, :func:`m_step`, :func:`psf_step` on an
+    :class:`EMState`.
+
+    Parameters
+    ----------
+    data : array (K, H, W) [photo-electrons] -- negative values (read noise after dark subtraction) are
+        clipped at 0 for the Poisson model; NaN is not allowed (use 0 and it contributes nothing).
+    angles : array (K,) [rad] -- polarizer angles.
+    psf0 : array (Hp, Wp) or (K, Hp, Wp) on the object grid, optional -- initial or known PSF (centred).
+    pupil : array (n, n), optional -- aperture for ``psf_mode="pupil"`` and the diffraction-limited start.
+    options : EMOptions, optional
+    **keywords : the flat option names above (unknown names raise TypeError).
+
+    Returns
+    -------
+    DeconvolutionResult
+        ``aop`` is the fixed AOP, or the per-pixel estimate with ``estimate_aop=True`` [rad].
+    """
+    t0 = time.perf_counter()
+    opts = _resolve_options(options, keywords)
+    problem, state = _setup(data, angles, psf0, pupil, opts)
+    it, tol = 0, opts.stop.tol
+    for it in range(1, opts.stop.iterations + 1):
+        T, Qp, Pp, R = e_step(problem, state)
+        s0_new, P_new = m_step(problem, state, T, Qp, Pp)
+        h_new, phase_new = psf_step(problem, state, R)
+        _accept(problem, state, s0_new, P_new, h_new, phase_new)
+        if opts.stop.callback is not None:
+            opts.stop.callback(_result(problem, state, it, time.perf_counter() - t0))
+        L = state.loglik
+        if tol is not None and abs(L[-1] - L[-2]) <= tol * abs(L[-2]):
             break
-    alpha = model.alpha
-    aop_out = ops.crop(alpha) if np.ndim(alpha) else np.full((H, W), float(alpha))
+    return _result(problem, state, it, time.perf_counter() - t0)
+
+
+def _result(problem: _Problem, state: EMState, iterations, seconds) -> DeconvolutionResult:
+    ops, alpha = problem.ops, problem.model.alpha
+    aop = ops.crop(alpha) if np.ndim(alpha) else np.full((ops.H, ops.W), float(alpha))
     return DeconvolutionResult(
-        s0=ops.crop(s0),
-        dolp=np.clip(ops.crop(P), 0, 1),
-        aop=aop_out,
-        psfs=h,
-        classes=classes,
-        priors=priors,
-        loglik=np.array(loglik),
-        objective=np.array(objective),
-        iterations=it,
-        notes=notes,
-        seconds=time.perf_counter() - t0,
+        s0=ops.crop(state.s0),
+        dolp=np.clip(ops.crop(state.P), 0, 1),
+        aop=aop,
+        psfs=state.h,
+        classes=state.classes,
+        priors=problem.priors,
+        loglik=np.array(state.loglik),
+        objective=np.array(state.objective),
+        iterations=iterations,
+        notes=problem.notes,
+        seconds=seconds,
     )
 
 
@@ -485,12 +792,17 @@ class _PerChannel:
 
 
 def _aop_mstep(B, th):
-    """alpha maximizing sum_n B_n ln cos^2(alpha - theta_n) per pixel: 1-deg grid, parabolic refinement."""
+    """alpha maximizing sum_n B_n ln cos^2(alpha - theta_n) per pixel: 1-deg grid, parabolic refinement.
+
+    ``B`` (K, Hp, Wp) weights, ``th`` (K,) [rad]; returns alpha (Hp, Wp) [rad]. The table
+    ln cos^2(g - theta_n) is (grid, K): the objective on the grid is one weighted sum over n per pixel,
+    accumulated in the order n = 0, 1, ... (the same sums as a per-grid-point loop).
+    """
     grid = np.radians(np.arange(-90, 90, 1.0))
-    vals = []
-    for g in grid:
-        vals.append(np.sum(B * np.log(np.maximum(np.cos(g - th[:, None, None]) ** 2, 1e-300)), 0))
-    vals = np.stack(vals)
+    table = np.log(np.maximum(np.cos(grid[:, None] - th[None, :]) ** 2, 1e-300))  # (G, K)
+    vals = table[:, 0, None, None] * B[0]
+    for n in range(1, B.shape[0]):
+        vals += table[:, n, None, None] * B[n]
     k = np.argmax(vals, 0)
     km, kp = (k - 1) % grid.size, (k + 1) % grid.size
     f0 = np.take_along_axis(vals, k[None], 0)[0]
