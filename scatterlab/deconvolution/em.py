@@ -42,6 +42,18 @@ from ``psf0``, else the diffraction-limited PSF of ``pupil``. The Poisson log-li
 :math:`\sum_n\sum_y[d_n\ln i_n - i_n]` is recorded every iteration; without priors it never decreases.
 Speed: with one PSF and a known AOP the channel objects are linear in 2-3 Stokes images, and the convolutions
 act on those (:class:`_StokesBasis`); otherwise channel by channel.
+
+Structure: :func:`blind_deconvolve` validates and sets up a fixed problem and an :class:`EMState`, then
+iterates :func:`e_step`, :func:`m_step` and :func:`psf_step`; its options are grouped in small dataclasses
+(:class:`EMOptions` of :class:`PSFOptions`, :class:`PolarizationOptions`, :class:`WindowOptions`,
+:class:`StartOptions`, :class:`StopOptions`), and the flat keywords of earlier versions still work.
+
+AOP: the geometry fixes it (``aop``, default 0) for unpolarized light observed in the specular plane; where it
+does not (off the specular plane, polarized sources such as LeMaster and Cain's bars, Figs. 31-33),
+``estimate_aop=True`` estimates it per pixel by the M-step above, starting from ``aop`` if given, else from the
+AOP of the data's least-squares Stokes images. Its resolution is about 0.1 deg (1-deg grid, parabola). With
+three channels and one PSF per channel the blind problem is nearly degenerate (per pixel, S0, P and alpha
+already fit three channel values) and the AOP can drift with the iterations (studies/fig31_fig33).
 """
 
 from __future__ import annotations

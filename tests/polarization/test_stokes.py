@@ -42,3 +42,42 @@ def test_bad_input():
         P.linear_polarizer(0, 2.0)
     with pytest.raises(ValueError, match="M"):
         P.coherency_matrix(np.full((4, 4), np.nan))
+
+
+def test_one_zero_light_rule_with_a_threshold_and_a_mask():
+    """dolp, aop, signed_dolp and dolp_aop share one rule: NaN where S0 <= min_intensity (no warnings);
+    the mask of dolp_aop is exactly the defined pixels."""
+    S = np.array([[0.0, 0, 0], [0.5, 0.2, 0.1], [2.0, 1.0, 0.0], [-1.0, 0, 0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        d, a, valid = P.dolp_aop(S, min_intensity=0.5, mask=True)
+        s = P.signed_dolp(S, min_intensity=0.5)
+    np.testing.assert_array_equal(valid, [False, False, True, False])
+    assert (
+        np.isnan(d[[0, 1, 3]]).all()
+        and np.isnan(a[[0, 1, 3]]).all()
+        and np.isnan(s[[0, 1, 3]]).all()
+    )
+    assert d[2] == 0.5 and a[2] == 0.0 and s[2] == 0.5
+    assert P.dolp(S)[1] == pytest.approx(np.hypot(0.2, 0.1) / 0.5)  # default threshold 0
+    with pytest.raises(ValueError, match="min_intensity"):
+        P.dolp(S, min_intensity=-1.0)
+    with pytest.raises(ValueError, match=r"\(\.\.\., 4\) or \(\.\.\., 3\)"):
+        P.dolp(np.ones((3, 5)))
+
+
+def test_signed_dolp_is_the_projection_on_a_known_aop():
+    """For light polarized at the AOP a, the signed DOLP on a equals the DOLP, on a + 90 deg its negative,
+    on a + 45 deg zero (Malus); for unpolarized light with Gaussian Stokes noise it is unbiased (mean within
+    4 standard errors of 0), where the DOLP has the Rician bias (mean about sqrt(pi/2) sigma)."""
+    a = np.radians([-83.0, 2.0, 30.0])
+    S = P.stokes_vector(1.0, 0.4, a)
+    np.testing.assert_allclose(P.signed_dolp(S, a), P.dolp(S), rtol=1e-14)
+    np.testing.assert_allclose(P.signed_dolp(S, a + np.pi / 2), -P.dolp(S), rtol=1e-14)
+    np.testing.assert_allclose(P.signed_dolp(S, a + np.pi / 4), 0.0, atol=1e-15)
+    rng = np.random.default_rng(3)
+    sigma, n = 0.05, 20000
+    noisy = np.stack([np.ones(n), *(sigma * rng.standard_normal((2, n)))], axis=-1)
+    signed = P.signed_dolp(noisy)
+    assert abs(signed.mean()) < 4 * sigma / np.sqrt(n)
+    assert P.dolp(noisy).mean() == pytest.approx(np.sqrt(np.pi / 2) * sigma, rel=0.03)
