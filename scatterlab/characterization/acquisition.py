@@ -100,6 +100,20 @@ def plate_scene(plate, labels, theta):
 
     Scratches are bare metal of the plate's roughness: an isotropic pBRDF cannot give their wire-grid
     polarization, and a smoother scratch would outshine the plate, which the measured images do not show.
+
+    Parameters
+    ----------
+    plate : Plate
+        Materials and roughnesses.
+    labels : ndarray of int, shape (H, W)
+        Label map (0 paint, 1 metal, 2 scratch).
+    theta : float
+        Specular angle theta_i = theta_r [rad].
+
+    Returns
+    -------
+    Scene
+        Per-pixel index, roughness and geometry for :func:`scatterlab.imaging.render_stokes`.
     """
     from scatterlab.imaging import Scene
 

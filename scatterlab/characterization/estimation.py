@@ -65,6 +65,8 @@ class RegionData:
     bias : ndarray, shape (M,), or None
         Re-simulated restoration bias already subtracted from ``mean``
         (:mod:`~scatterlab.characterization.self_calibration`).
+    bias_spread : ndarray, shape (M,), or None
+        Bootstrap spread of that bias (one replicate's standard deviation; 0 when deterministic).
     """
 
     name: str
@@ -75,6 +77,7 @@ class RegionData:
     pixels: int
     truth: tuple | None = None
     bias: np.ndarray | None = None
+    bias_spread: np.ndarray | None = None
 
 
 @dataclass
@@ -113,12 +116,38 @@ class PixelMaps:
 
 
 def default_margin(theta_max: float) -> int:
-    """Erosion of the region masks [object pixels]: one lambda/D (2 pixels) stretched by 1/cos(theta_max)."""
+    """Erosion of the region masks [object pixels]: one lambda/D (2 pixels) stretched by 1/cos(theta_max).
+
+    Parameters
+    ----------
+    theta_max : float
+        Largest specular angle of the scene [rad].
+
+    Returns
+    -------
+    int
+        Erosion [object pixels].
+    """
     return int(np.ceil(2.0 / np.cos(theta_max)))
 
 
 def region_masks(labels, interior, margin: int) -> dict:
-    """Paint (label 0) and bare-metal (label 1) masks eroded by ``margin`` pixels, within ``interior``."""
+    """Paint (label 0) and bare-metal (label 1) masks eroded by ``margin`` pixels, within ``interior``.
+
+    Parameters
+    ----------
+    labels : ndarray of int, shape (H, W)
+        Object-coordinate label map.
+    interior : ndarray of bool, shape (H, W)
+        Pixels scored.
+    margin : int
+        Erosion [pixels].
+
+    Returns
+    -------
+    dict
+        ``{"paint": mask, "metal": mask}``, boolean arrays (H, W).
+    """
     labels = np.asarray(labels)
     out = {}
     for name, lab in (("paint", 0), ("metal", 1)):
@@ -130,7 +159,29 @@ def region_masks(labels, interior, margin: int) -> dict:
 
 
 def region_data(name, stack, labels, interior, margin, thetas, truth=None) -> RegionData:
-    """Region means and their error estimate (module docstring) for a DOLP stack ``(M, H, W)``."""
+    """Region means and their error estimate (module docstring) for a DOLP stack ``(M, H, W)``.
+
+    Parameters
+    ----------
+    name : str
+        ``"paint"`` or ``"metal"``.
+    stack : ndarray, shape (M, H, W)
+        Registered DOLP per geometry (NaN where undefined).
+    labels : ndarray of int, shape (H, W)
+        Layout (0 dielectric, 1 metal).
+    interior : ndarray of bool, shape (H, W)
+        Pixels scored.
+    margin : int
+        Erosion of the region [pixels].
+    thetas : ndarray, shape (M,)
+        Specular angles [rad].
+    truth : tuple of float, optional
+        (n, kappa) of the material when known.
+
+    Returns
+    -------
+    RegionData
+    """
     lab = {"paint": 0, "metal": 1}[name]
     masks = {}
     for k in (margin, 2 * margin):

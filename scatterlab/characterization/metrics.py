@@ -28,7 +28,20 @@ __all__ = ["score_plate", "rmse"]
 
 
 def rmse(a, b, sel) -> float:
-    """Root-mean-square difference of ``a`` and ``b`` over the finite entries selected by ``sel``."""
+    """Root-mean-square difference of ``a`` and ``b`` over the finite entries selected by ``sel``.
+
+    Parameters
+    ----------
+    a, b : ndarray
+        Images of the same shape.
+    sel : ndarray of bool
+        Entries compared (broadcast to the images).
+
+    Returns
+    -------
+    float
+        The RMS difference (NaN when nothing is selected).
+    """
     d = (np.asarray(a) - np.asarray(b))[sel]
     d = d[np.isfinite(d)]
     return float(np.sqrt(np.mean(d**2))) if d.size else float("nan")
@@ -105,6 +118,9 @@ def _self_calibrated(result, case, kind, regions, thetas, cfg, rng, sel, margin,
         None if case == "no_turbulence" else resample_psf(o.restorations[(case, kind)].psf, shape)
         for o in obs
     ]
+    from scatterlab.characterization.pipeline import cases_of
+
+    d_over_r0 = dict(cases_of(cfg))[case]
     bias = restoration_bias(
         regions,
         layout,
@@ -114,14 +130,33 @@ def _self_calibrated(result, case, kind, regions, thetas, cfg, rng, sel, margin,
         rng,
         sel,
         margin,
-        blind=case != "no_turbulence",
+        blind=d_over_r0 is not None,
+        d_over_r0=d_over_r0,
+        replicates=cfg.calibration_replicates,
         executor=executor,
     )
     return [bias_corrected(r, bias[r.name]) for r in regions]
 
 
 def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
-    """Fill ``result.estimates`` and ``result.metrics`` for every image key (module docstring)."""
+    """Fill ``result.estimates`` and ``result.metrics`` for every image key (module docstring).
+
+    Parameters
+    ----------
+    result : PlateResult
+        Observations of one plate; its ``estimates`` and ``metrics`` are filled in place.
+    cfg : SceneConfig
+    rng : numpy.random.Generator
+        Self-calibration and posterior sampling.
+    executor : optional
+        Parallel re-simulations and posteriors.
+    priors : tuple of SuperGaussianPrior, optional
+        DOLP priors (classification scores).
+
+    Returns
+    -------
+    None
+    """
     from scatterlab.characterization.pipeline import image_kinds, interior
 
     obs, labels, plate = result.observations, result.labels, result.plate
@@ -173,6 +208,7 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
                     dolp_mean=r.data.mean.tolist(),
                     dolp_error=r.data.error.tolist(),
                     dolp_bias_corrected=r.data.bias.tolist(),
+                    dolp_bias_spread=r.data.bias_spread.tolist(),
                 )
         result.estimates[key] = est
         result.metrics[key] = cs

@@ -82,20 +82,50 @@ class PlateResult:
 
 
 def log_stage(message: str) -> None:
-    """One plain log line on standard error when it is not a terminal (terminals get progress bars)."""
+    """One plain log line on standard error when it is not a terminal (terminals get progress bars).
+
+    Parameters
+    ----------
+    message : str
+
+    Returns
+    -------
+    None
+    """
     if not (hasattr(sys.stderr, "isatty") and sys.stderr.isatty()):
         print(f"[scatterlab] {message}", file=sys.stderr, flush=True)
 
 
 def interior(shape, margin):
-    """Boolean mask of the pixels at least ``margin`` from the image edges (registration repeats edges)."""
+    """Boolean mask of the pixels at least ``margin`` from the image edges (registration repeats edges).
+
+    Parameters
+    ----------
+    shape : tuple of int
+        (H, W).
+    margin : int
+        Border [pixels].
+
+    Returns
+    -------
+    ndarray of bool, shape (H, W)
+    """
     m = np.zeros(shape, bool)
     m[margin : shape[0] - margin, margin : shape[1] - margin] = True
     return m
 
 
 def cases_of(cfg: SceneConfig) -> list:
-    """[(case name, D/r0 or None)]: the no-turbulence case first, then one per ``cfg.d_over_r0``."""
+    """[(case name, D/r0 or None)]: the no-turbulence case first, then one per ``cfg.d_over_r0``.
+
+    Parameters
+    ----------
+    cfg : SceneConfig
+
+    Returns
+    -------
+    list of (str, float or None)
+    """
     return [("no_turbulence", None)] + [(f"D_r0_{x:g}", float(x)) for x in cfg.d_over_r0]
 
 
@@ -178,7 +208,17 @@ def _register(o: Observation, ideal: Ideal) -> None:
 
 def image_kinds(cfg: SceneConfig) -> list:
     """[(image key, case, kind)] in report order: the restored no-turbulence image (the reference), the
-    unrestored one, then degraded and corrected per D/r0."""
+    unrestored one, then degraded and corrected per D/r0.
+
+    Parameters
+    ----------
+    cfg : SceneConfig
+
+    Returns
+    -------
+    list of (str, str, str)
+        (image key, case, restoration kind).
+    """
     kinds = [
         ("no_turbulence", "no_turbulence", "restored"),
         ("no_turbulence_unrestored", "no_turbulence", "degraded"),
@@ -191,7 +231,25 @@ def image_kinds(cfg: SceneConfig) -> list:
 def run_plate(
     plate, cfg: SceneConfig, rng, *, executor=None, ideal: Ideal = Ideal(), checkpoint=None
 ) -> PlateResult:
-    """The pipeline for one plate: acquire, restore, register, invert, and score against the truth."""
+    """The pipeline for one plate: acquire, restore, register, invert, and score against the truth.
+
+    Parameters
+    ----------
+    plate : Plate
+    cfg : SceneConfig
+    rng : numpy.random.Generator
+        Draws the scratches, screens, noise, start PSFs and posterior seeds.
+    executor : optional
+        Parallel deconvolutions and posteriors.
+    ideal : Ideal
+        Stages replaced by their ideal versions.
+    checkpoint : path, optional
+        Folder of the deconvolution checkpoints.
+
+    Returns
+    -------
+    PlateResult
+    """
     from scatterlab.characterization import metrics
     from scatterlab.characterization.scene_config import plate_labels
     from scatterlab.deconvolution import PRIOR_SETS

@@ -19,7 +19,19 @@ __all__ = ["TABLE4", "TABLE5", "image_key"]
 
 
 def image_key(image: str, d_over_r0: float) -> str:
-    """The pipeline's name of an image: ``"no_turbulence"`` or ``"D_r0_<D/r0>_<image>"``."""
+    """The pipeline's name of an image: ``"no_turbulence"`` or ``"D_r0_<D/r0>_<image>"``.
+
+    Parameters
+    ----------
+    image : str
+        ``"no_turbulence"``, ``"degraded"`` or ``"corrected"``.
+    d_over_r0 : float
+        Turbulence strength.
+
+    Returns
+    -------
+    str
+    """
     return "no_turbulence" if image == "no_turbulence" else f"D_r0_{d_over_r0:g}_{image}"
 
 

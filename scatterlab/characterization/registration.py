@@ -44,7 +44,20 @@ def _column_coordinates(W, factor):
 
 def foreshorten(labels, theta_r) -> np.ndarray:
     """Object-coordinate label map ``(H, W)`` -> what a distant camera at ``theta_r`` [rad] sees (nearest
-    neighbour; columns beyond the map repeat its edge, the plate being larger than the field)."""
+    neighbour; columns beyond the map repeat its edge, the plate being larger than the field).
+
+    Parameters
+    ----------
+    labels : ndarray, shape (..., H, W)
+        Object-coordinate map(s).
+    theta_r : float
+        Observation angle [rad], in [0, 89) deg.
+
+    Returns
+    -------
+    ndarray, shape (..., H, W)
+        Camera-coordinate map(s).
+    """
     labels = np.asarray(labels)
     H, W = labels.shape[-2:]
     x = np.clip(
@@ -56,7 +69,22 @@ def foreshorten(labels, theta_r) -> np.ndarray:
 def keystone_correct(image, theta_r, order: int = 1) -> np.ndarray:
     """Camera image(s) ``(..., H, W)`` at ``theta_r`` [rad] -> object coordinates (same shape): column x of the
     result samples the camera at ``x cos(theta_r)`` about the centre (spline of ``order``; 1 keeps DOLP in
-    [0, 1] and counts non-negative)."""
+    [0, 1] and counts non-negative).
+
+    Parameters
+    ----------
+    image : ndarray, shape (..., H, W)
+        Camera image(s).
+    theta_r : float
+        Observation angle [rad], in [0, 89) deg.
+    order : int
+        Spline order (0 for class maps).
+
+    Returns
+    -------
+    ndarray, shape (..., H, W)
+        Object-coordinate image(s).
+    """
     img = np.asarray(image, float)
     H, W = img.shape[-2:]
     xc = _column_coordinates(W, np.cos(_check_theta(theta_r)))
@@ -70,7 +98,19 @@ def estimate_shift(reference, image, max_shift=None) -> np.ndarray:
     """Translation ``(dy, dx)`` [pixels] that, applied to ``image`` (:func:`apply_shift`), best aligns it with
     ``reference`` (both ``(H, W)``): the peak of their cross-correlation within ``max_shift`` (default a quarter
     of the smaller side), refined by a parabola per axis. Plain rather than phase correlation: the images
-    compared are blurred to different degrees, and whitening would weight their noisiest frequencies most."""
+    compared are blurred to different degrees, and whitening would weight their noisiest frequencies most.
+
+    Parameters
+    ----------
+    reference, image : ndarray, shape (H, W)
+    max_shift : float, optional
+        Largest shift searched [pixels].
+
+    Returns
+    -------
+    ndarray, shape (2,)
+        (dy, dx) [pixels].
+    """
     a = np.asarray(reference, float)
     b = np.asarray(image, float)
     if a.shape != b.shape or a.ndim != 2:
@@ -97,7 +137,20 @@ def estimate_shift(reference, image, max_shift=None) -> np.ndarray:
 
 
 def apply_shift(image, shift, order: int = 1) -> np.ndarray:
-    """Translate image(s) ``(..., H, W)`` by ``shift = (dy, dx)`` [pixels] (edges repeated)."""
+    """Translate image(s) ``(..., H, W)`` by ``shift = (dy, dx)`` [pixels] (edges repeated).
+
+    Parameters
+    ----------
+    image : ndarray, shape (..., H, W)
+    shift : array_like, shape (2,)
+        (dy, dx) [pixels].
+    order : int
+        Spline order (0 for class maps).
+
+    Returns
+    -------
+    ndarray, shape (..., H, W)
+    """
     img = np.asarray(image, float)
     flat = img.reshape((-1,) + img.shape[-2:])
     out = [ndimage.shift(f, shift, order=order, mode="nearest") for f in flat]

@@ -94,7 +94,20 @@ def _title(key: str) -> str:
 
 def plate_figure(out, result, cfg) -> Path:
     """S0, DOLP and classes at the geometry nearest 50 deg, n and kappa maps (all geometries), one column per
-    image, each row with its colour bar and the class map with a legend (Figs. 49-50, 59-61)."""
+    image, each row with its colour bar and the class map with a legend (Figs. 49-50, 59-61).
+
+    Parameters
+    ----------
+    out : path
+        Output folder.
+    result : PlateResult
+    cfg : SceneConfig
+
+    Returns
+    -------
+    Path
+        The PNG written (``<metal>.png``).
+    """
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
@@ -221,7 +234,18 @@ def _write_h5(path: Path, cfg, results) -> None:
 
 
 def acceptance_checks(cfg, results) -> list:
-    """The main job's acceptance numbers, checked against the truth: list of (check, value, passed)."""
+    """The main job's acceptance numbers, checked against the truth: list of (check, value, passed).
+
+    Parameters
+    ----------
+    cfg : SceneConfig
+    results : list of PlateResult
+
+    Returns
+    -------
+    list of (str, str, bool)
+        (check, the number it rests on, passed).
+    """
     out = []
     for res in results:
         p, m = res.plate, res.metrics
@@ -294,7 +318,23 @@ def acceptance_checks(cfg, results) -> list:
 
 
 def write_all(folder: RunFolder, cfg, results, *, seconds: float, ideal) -> Path:
-    """Write ``results.h5``, ``summary.json`` and ``report.md`` (last); remove the checkpoints."""
+    """Write ``results.h5``, ``summary.json`` and ``report.md`` (last); remove the checkpoints.
+
+    Parameters
+    ----------
+    folder : RunFolder
+    cfg : SceneConfig
+    results : list of PlateResult
+    seconds : float
+        Run time [s].
+    ideal : Ideal
+        Stages replaced by their ideal versions (recorded).
+
+    Returns
+    -------
+    Path
+        ``report.md``.
+    """
     from scatterlab.characterization.report_text import report_markdown
     from scatterlab.runtime.results import write_json, write_text
 

@@ -135,7 +135,23 @@ def _posterior_lines(plate, psum) -> list:
 
 def report_markdown(cfg, results, checks, *, seconds, ideal) -> str:
     """The whole ``report.md``: per plate the error, classification, n/kappa and posterior tables, the figure,
-    and the acceptance checks with the number each rests on."""
+    and the acceptance checks with the number each rests on.
+
+    Parameters
+    ----------
+    cfg : SceneConfig
+    results : list of PlateResult
+    checks : list of (str, str, bool)
+        From :func:`~scatterlab.characterization.report.acceptance_checks`.
+    seconds : float
+        Run time [s].
+    ideal : Ideal
+
+    Returns
+    -------
+    str
+        Markdown.
+    """
     import numpy as np
 
     lines = _header(cfg, seconds, ideal)

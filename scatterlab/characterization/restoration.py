@@ -101,14 +101,36 @@ class RestoreSettings:
 
 def signed_dolp(S) -> np.ndarray:
     """DOLP ``S1/S0`` of linear Stokes images ``(H, W, 3)`` with the AOP fixed at 0; NaN where ``S0 <= 0``
-    (:func:`scatterlab.polarization.signed_dolp`)."""
+    (:func:`scatterlab.polarization.signed_dolp`).
+
+    Parameters
+    ----------
+    S : ndarray, shape (H, W, 3)
+        Linear Stokes images.
+
+    Returns
+    -------
+    ndarray, shape (H, W)
+    """
     from scatterlab import polarization
 
     return polarization.signed_dolp(S)
 
 
 def degraded(acq: Acquisition, priors=None) -> Restoration:
-    """The least-squares Stokes estimate of the data (no deconvolution), classified by DOLP thresholds."""
+    """The least-squares Stokes estimate of the data (no deconvolution), classified by DOLP thresholds.
+
+    Parameters
+    ----------
+    acq : Acquisition
+    priors : tuple of SuperGaussianPrior, optional
+        Thresholds for the classes (None: no classes).
+
+    Returns
+    -------
+    Restoration
+        ``kind="degraded"``.
+    """
     from scatterlab.deconvolution import classify_dolp
     from scatterlab.imaging import stokes_from_channels
 

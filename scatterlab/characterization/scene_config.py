@@ -18,9 +18,11 @@ priors = "ch7"                        # DOLP prior set for the classification (c
 estimate = ["classes", "n_kappa", "posterior"]   # what to compute (leave out what is not needed)
 sigma_known = 0.3                     # roughness used by the n, kappa inversion (the reference measured it)
 posterior_steps = 1500
+calibration_replicates = 2            # re-simulations per geometry that calibrate a blind restoration's bias
 seed = 20101210
-plate_zoom = 2.0                      # field of view: 1 = the whole "st" template; 2 = the right side of the
-plate_center = [7.2, 8.5]             # "s" and the left side of the "t", as in Figs. 49-52 (template units)
+plate_zoom = 4.0                      # template magnification: 1 = the whole "st"; 2 = the text's field of
+plate_center = [7.2, 8.5]             # Figs. 49-52 (right of the "s", left of the "t") on 256 px; 4 = the
+                                      # text's features at 128 px (the same lambda/D per feature, half the field)
 region_margin_px = 4                  # erosion of the region masks (default: 2 px / cos of the largest angle)
 
 [[plates]]                            # one painted plate per entry (Figs. 49-61)
@@ -98,8 +100,9 @@ class SceneConfig:
     estimate: list = field(default_factory=lambda: list(ESTIMATES))
     sigma_known: float = 0.3
     posterior_steps: int = 1500
+    calibration_replicates: int = 2
     seed: int = 20101210
-    plate_zoom: float = 2.0
+    plate_zoom: float = 4.0
     plate_center: list = field(default_factory=lambda: [7.2, 8.5])
     region_margin_px: int | None = None
     plates: list = field(default_factory=lambda: [Plate(), Plate("steel", 3.60, 5.88)])
@@ -203,6 +206,10 @@ def _check_ranges(cfg: SceneConfig) -> None:
         raise ValueError(f"iterations must be in [1, 100000], got {cfg.iterations}")
     if not 100 <= cfg.posterior_steps <= 10**6:
         raise ValueError(f"posterior_steps must be in [100, 1000000], got {cfg.posterior_steps}")
+    if not 1 <= cfg.calibration_replicates <= 100:
+        raise ValueError(
+            f"calibration_replicates must be in [1, 100], got {cfg.calibration_replicates}"
+        )
     if not 0 <= cfg.seed < 2**63:
         raise ValueError(f"seed must be in [0, 2^63), got {cfg.seed}")
     if cfg.region_margin_px is not None and not 0 <= cfg.region_margin_px <= cfg.image_size // 8:
@@ -219,12 +226,28 @@ def _check_ranges(cfg: SceneConfig) -> None:
 
 
 def default_scene() -> SceneConfig:
-    """The bundled scene: painted aluminium and painted steel at 1550 nm, seven specular geometries."""
+    """The bundled scene: painted aluminium and painted steel at 1550 nm, seven specular geometries.
+
+    Returns
+    -------
+    SceneConfig
+    """
     return SceneConfig().validate()
 
 
 def plate_labels(cfg: SceneConfig, rng):
-    """The plate's object-coordinate label map ``(image_size, image_size)`` (0 paint, 1 metal, 2 scratch)."""
+    """The plate's object-coordinate label map ``(image_size, image_size)`` (0 paint, 1 metal, 2 scratch).
+
+    Parameters
+    ----------
+    cfg : SceneConfig
+    rng : numpy.random.Generator
+        Seeds the scratches.
+
+    Returns
+    -------
+    ndarray of int, shape (image_size, image_size)
+    """
     from scatterlab.imaging import painted_plate
 
     return painted_plate(
@@ -237,6 +260,16 @@ def load_scene(path) -> SceneConfig:
 
     Unknown keys (also inside ``[[plates]]``), wrong types and out-of-range values raise ValueError naming
     the key; a file that is not TOML raises ValueError saying that a TOML scene was expected.
+
+    Parameters
+    ----------
+    path : path
+        TOML scene file.
+
+    Returns
+    -------
+    SceneConfig
+        Validated.
     """
     import tomllib
 

@@ -206,3 +206,38 @@ def test_bias_correction_keeps_a_dolp_in_its_range():
     c = bias_corrected(r, np.array([-0.12, 0.05]))
     np.testing.assert_allclose(c.mean, [1.0, 0.0])
     np.testing.assert_allclose(c.error, np.hypot(0.01, [0.06, 0.025]))
+
+
+def test_bootstrap_bias_error_carries_the_data_draw():
+    """A bootstrap bias over R replicates leaves the data's own draw: its error is the replicate spread times
+    sqrt(1 + 1/R), in quadrature with half the bias (scene mismatch); a deterministic bias keeps half of it."""
+    from scatterlab.characterization.estimation import RegionData
+    from scatterlab.characterization.self_calibration import BiasEstimate, bias_corrected
+
+    r = RegionData(
+        "paint", np.array([0.5, 0.6]), np.array([0.01, 0.02]), np.zeros(2), np.zeros(2), 50
+    )
+    b = BiasEstimate(np.array([-0.2, -0.1]), np.array([0.04, 0.04]), 2)
+    c = bias_corrected(r, b)
+    np.testing.assert_allclose(c.mean, [0.7, 0.7])
+    expect = np.sqrt(r.error**2 + (0.5 * np.abs(b.mean)) ** 2 + 0.04**2 * 1.5)
+    np.testing.assert_allclose(c.error, expect)
+    np.testing.assert_allclose(c.bias_spread, 0.04)
+
+
+def test_bootstrap_needs_a_positive_turbulence_strength():
+    from scatterlab.characterization.self_calibration import restoration_bias
+
+    with pytest.raises(ValueError, match="d_over_r0"):
+        restoration_bias(
+            [],
+            np.zeros((8, 8)),
+            np.radians([30.0]),
+            [None],
+            None,
+            None,
+            None,
+            1,
+            blind=True,
+            d_over_r0=-1.0,
+        )
