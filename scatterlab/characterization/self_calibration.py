@@ -46,6 +46,12 @@ __all__ = ["BiasEstimate", "estimated_plate", "restoration_bias", "bias_correcte
 # estimate of the true one)
 SYSTEMATIC_FRACTION = 0.5
 BOOTSTRAP_REPLICATES = 2  # re-simulations per geometry of a blindly restored image
+CALIBRATION_PASSES = (
+    2  # bootstrap passes (each re-estimates the plate from the previous pass's correction)
+)
+RATIO_MIN_DOLP = (
+    0.1  # a region this polarized (synthetic truth) is corrected by a ratio, not a difference
+)
 
 
 @dataclass(frozen=True)
@@ -62,11 +68,15 @@ class BiasEstimate:
         deterministic known-PSF re-simulation).
     replicates : int
         Re-simulations per geometry.
+    ratio : ndarray, shape (M,), or None
+        Restored over true region-mean DOLP (mean over replicates), for a polarized region diluted by a
+        bright neighbour's halo: the data are then divided by it instead of having ``mean`` subtracted.
     """
 
     mean: np.ndarray
     spread: np.ndarray
     replicates: int = 1
+    ratio: np.ndarray | None = None
 
     def systematic(self) -> np.ndarray:
         """Error left after subtracting :attr:`mean` [DOLP], shape (M,): the scene-mismatch fraction of the
@@ -185,29 +195,47 @@ def restoration_bias(
     R = int(BOOTSTRAP_REPLICATES if replicates is None else replicates) if bootstrap else 1
     if R < 1:
         raise ValueError(f"replicates must be >= 1, got {replicates!r}")
-    plate = estimated_plate(regions, thetas, cfg.sigma_known)
     labels = (np.asarray(class_map) > 0).astype(int)
-    M = len(thetas)
-    tasks = [
-        (plate, labels, th, psf, blind, d_over_r0, cfg, int(rng.integers(2**63)))
-        for _ in range(R)
-        for th, psf in zip(thetas, psfs)
-    ]
     ex = executor if executor is not None else get_executor("serial")
-    out = ex.map(_resimulate_task, tasks, desc="self-calibration")
+    bias, current = {}, list(regions)
+    for _ in range(CALIBRATION_PASSES if bootstrap else 1):
+        # each pass re-estimates the plate from the data corrected by the previous pass: a paint whose
+        # DOLP the blind restoration halved is first estimated as a brighter, lossier paint than it is
+        plate = estimated_plate(current, thetas, cfg.sigma_known)
+        tasks = [
+            (plate, labels, th, psf, blind, d_over_r0, cfg, int(rng.integers(2**63)))
+            for _ in range(R)
+            for th, psf in zip(thetas, psfs)
+        ]
+        out = ex.map(_resimulate_task, tasks, desc="self-calibration")
+        bias = _bias_from_replicates(regions, out, labels, interior, margin, thetas, R, bootstrap)
+        current = [bias_corrected(r, bias[r.name]) for r in regions]
+    return bias
+
+
+def _bias_from_replicates(regions, out, labels, interior, margin, thetas, R, bootstrap) -> dict:
+    """Per region, the :class:`BiasEstimate` of ``R`` replicates of the ``M`` geometries (``out`` in
+    replicate-major order: (restored DOLP, true DOLP) pairs)."""
+    M = len(thetas)
     stack = np.stack([d for d, _ in out]).reshape((R, M) + labels.shape)
     truth = np.stack([t for _, t in out[:M]])
     bias = {}
     for r in regions:
         lab = 0 if r.name == "paint" else 1
         true = np.array([np.nanmean(t[labels == lab]) for t in truth])
-        b = np.stack(
-            [region_data(r.name, st, labels, interior, margin, thetas).mean - true for st in stack]
+        est = np.stack(
+            [region_data(r.name, st, labels, interior, margin, thetas).mean for st in stack]
         )
+        b = est - true
         spread = (
             np.full(M, np.sqrt(np.nanmean(np.nanvar(b, axis=0, ddof=1)))) if R > 1 else np.zeros(M)
         )
-        bias[r.name] = BiasEstimate(b.mean(axis=0), spread, R)
+        ratio = None
+        if bootstrap and r.name == "paint" and np.all(true > RATIO_MIN_DOLP):
+            # a dim polarized region is diluted by its bright neighbour's unpolarized halo: restored =
+            # ratio x true, a ratio that depends on the layout and contrast far more than on the paint
+            ratio = est.mean(axis=0) / true
+        bias[r.name] = BiasEstimate(b.mean(axis=0), spread, R, ratio)
     return bias
 
 
@@ -230,13 +258,23 @@ def bias_corrected(region: RegionData, bias) -> RegionData:
     if not isinstance(bias, BiasEstimate):
         b = np.asarray(bias, float)
         bias = BiasEstimate(b, np.zeros_like(b), 1)
-    sys_err = bias.systematic()
+    if bias.ratio is not None:
+        corrected = region.mean / bias.ratio
+        # the same error model on the equivalent difference; the spread scales with the correction
+        equivalent = BiasEstimate(
+            region.mean - corrected, bias.spread / bias.ratio, bias.replicates
+        )
+        sys_err = equivalent.systematic()
+        subtracted = equivalent.mean
+    else:
+        sys_err = bias.systematic()
+        subtracted = bias.mean
     # a DOLP is in [0, 1]: a corrected mean beyond it keeps the bound (its error still carries the bias)
-    mean = np.clip(region.mean - bias.mean, 0.0, 1.0)
+    mean = np.clip(region.mean - subtracted, 0.0, 1.0)
     return replace(
         region,
         mean=mean,
         error=np.sqrt(region.error**2 + sys_err**2),
-        bias=bias.mean,
+        bias=subtracted,
         bias_spread=bias.spread,
     )
