@@ -1,6 +1,7 @@
 """A normal (non-editable) install works: the wheel holds the library, its data and the studies.
 
-The slow test builds a wheel from a clean copy of the source tree, installs it with ``--no-deps``
+The slow test builds an sdist from a clean copy of the source tree (it must hold data/, docs and tests),
+then a wheel from that sdist, installs it with ``--no-deps``
 into a fresh virtual environment that sees this environment's installed dependencies through a
 ``.pth`` file (but not the source tree), and runs the command line from a folder outside the
 repository. The fast test checks
@@ -14,6 +15,7 @@ import shutil
 import subprocess
 import sys
 import sysconfig
+import tarfile
 import tomllib
 import venv
 import zipfile
@@ -93,27 +95,51 @@ def _clean_env() -> dict:
     return env
 
 
+def _build_sdist_then_wheel(src: Path, tmp_path: Path, env: dict) -> tuple[Path, Path]:
+    """The sdist of ``src``, and the wheel built from that sdist (not from the source tree), with the
+    build backend pyproject.toml asks for, installed once into a folder of its own."""
+    backend = tmp_path / "backend"
+    requires = tomllib.loads((ROOT / "pyproject.toml").read_text())["build-system"]["requires"]
+    _run(
+        [sys.executable, "-m", "pip", "install", "--quiet", "--target", backend, *requires],
+        tmp_path,
+        env,
+    )
+    env = dict(env, PYTHONPATH=str(backend))
+    build = "import sys, setuptools.build_meta as b; print(getattr(b, sys.argv[1])(sys.argv[2]))"
+    dist = tmp_path / "dist"
+    sdist = dist / _run([sys.executable, "-c", build, "build_sdist", dist], src, env).split()[-1]
+    with tarfile.open(sdist) as tar:
+        tar.extractall(tmp_path / "unpacked", filter="data")
+    (unpacked,) = (tmp_path / "unpacked").iterdir()
+    wheel = (
+        dist / _run([sys.executable, "-c", build, "build_wheel", dist], unpacked, env).split()[-1]
+    )
+    return sdist, wheel
+
+
+def _check_sdist(sdist: Path) -> None:
+    """The sdist holds the repository's data/ folder (scenes, reference numbers, examples), docs, tests."""
+    with tarfile.open(sdist) as tar:
+        names = {n.split("/", 1)[1] for n in tar.getnames() if "/" in n}
+    data = {
+        p.relative_to(ROOT).as_posix()
+        for p in (ROOT / "data").rglob("*")
+        if p.is_file() and "__pycache__" not in p.parts
+    }
+    assert "data/README.md" in data and any(n.startswith("data/examples/") for n in data)
+    assert data <= names, sorted(data - names)
+    assert {"LICENSE", "README.md", "tests/test_install_wheel.py", "docs/conventions.md"} <= names
+    assert not any("__pycache__" in n or n.endswith(".pyc") for n in names)
+
+
 @pytest.mark.slow
 def test_wheel_installs_and_runs_outside_the_repository(tmp_path):
     env = _clean_env()
     src = tmp_path / "src"
     shutil.copytree(ROOT, src, ignore=IGNORE)
-    _run(
-        [
-            sys.executable,
-            "-m",
-            "pip",
-            "wheel",
-            "--no-deps",
-            "--quiet",
-            "-w",
-            tmp_path / "dist",
-            src,
-        ],
-        tmp_path,
-        env,
-    )
-    (wheel,) = (tmp_path / "dist").glob("scatterlab-*.whl")
+    sdist, wheel = _build_sdist_then_wheel(src, tmp_path, env)
+    _check_sdist(sdist)
 
     names = zipfile.ZipFile(wheel).namelist()
     tops = {n.split("/", 1)[0] for n in names}

@@ -40,6 +40,7 @@ __all__ = [
     "run_plate",
     "interior",
     "log_stage",
+    "restore_task",
 ]
 
 
@@ -129,10 +130,23 @@ def cases_of(cfg: SceneConfig) -> list:
     return [("no_turbulence", None)] + [(f"D_r0_{x:g}", float(x)) for x in cfg.d_over_r0]
 
 
-def _restore_task(task):
-    """Module-level (process executors pickle it): one restoration."""
+def restore_task(task):
+    """One restoration, as a module-level function of one argument (process executors pickle it).
+
+    Parameters
+    ----------
+    task : tuple
+        ``(acquisition, RestoreSettings, seed, Ideal)``, the arguments of :func:`restore`.
+
+    Returns
+    -------
+    Restoration
+    """
     acq, settings, seed, ideal = task
     return restore(acq, settings, seed, ideal)
+
+
+_restore_task = restore_task  # the former private name
 
 
 def observe(

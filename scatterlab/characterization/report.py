@@ -20,7 +20,7 @@ import numpy as np
 
 from scatterlab.characterization.pipeline import image_kinds
 
-__all__ = ["RunFolder", "plate_figure", "write_all", "acceptance_checks"]
+__all__ = ["RunFolder", "plate_figure", "write_all", "acceptance_checks", "versions", "save_png"]
 
 CLASS_COLOURS = (
     "#2e7d32",
@@ -57,7 +57,14 @@ class RunFolder:
             self.report.unlink()  # from here on the folder holds an unfinished run
 
 
-def _versions() -> dict:
+def versions() -> dict:
+    """Versions of Python and of the packages a run's numbers depend on (written into summaries).
+
+    Returns
+    -------
+    dict
+        Name -> version string: ``python``, ``numpy``, ``scipy``, ``emcee``, ``scatterlab``.
+    """
     import emcee
     import scipy
 
@@ -72,7 +79,19 @@ def _versions() -> dict:
     }
 
 
-def _save_png(fig, path: Path) -> None:
+def save_png(fig, path: Path) -> None:
+    """Write a matplotlib figure as PNG (90 dpi, tight bounding box) atomically, then close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    path : Path
+        The PNG file (replaced if it exists).
+
+    Returns
+    -------
+    None
+    """
     import matplotlib.pyplot as plt
 
     from scatterlab.runtime.results import atomic_write_bytes
@@ -81,6 +100,9 @@ def _save_png(fig, path: Path) -> None:
     fig.savefig(buf, format="png", dpi=90, bbox_inches="tight")
     plt.close(fig)
     atomic_write_bytes(path, buf.getvalue(), overwrite=True)
+
+
+_versions, _save_png = versions, save_png  # the former private names
 
 
 def _title(key: str) -> str:

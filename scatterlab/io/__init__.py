@@ -18,14 +18,8 @@ from scatterlab.io.dataset import Optics, PolarimetricDataset, Truth, read_datas
 from scatterlab.io.dofp import SONY_POLARSENS, demosaic, mosaic
 from scatterlab.io.ellipsometry import EllipsometryData, read_ellipsometry, write_ellipsometry
 from scatterlab.io.mueller_brdf import MuellerBRDF, read_mueller_brdf, write_mueller_brdf
-from scatterlab.io.stacks import (
-    read_dataset_hdf5,
-    read_dataset_npz,
-    read_dataset_tiff,
-    write_dataset_hdf5,
-    write_dataset_npz,
-    write_dataset_tiff,
-)
+from scatterlab.io.stacks import *  # noqa: F403  (the per-format readers and writers)
+from scatterlab.io.stacks import __all__ as _stacks_all
 
 __all__ = [
     "MuellerBRDF",
@@ -39,13 +33,8 @@ __all__ = [
     "Truth",
     "read_dataset",
     "write_dataset",
-    "read_dataset_hdf5",
-    "write_dataset_hdf5",
-    "read_dataset_npz",
-    "write_dataset_npz",
-    "read_dataset_tiff",
-    "write_dataset_tiff",
     "demosaic",
     "mosaic",
     "SONY_POLARSENS",
+    *_stacks_all,
 ]

@@ -462,15 +462,16 @@ def write_dataset(
     Parameters
     ----------
     path : str or Path
-        Ending in ``.h5``/``.hdf5``, ``.npz`` or ``.tif``/``.tiff``.
-    ds : PolarimetricDataset
-    dofp_pattern : array_like (2, 2) [deg], optional
-        Store DoFP raw frames instead of channel images.
-    overwrite : bool
+        Ending in ``.h5``/``.hdf5`` (HDF5, images gzip-compressed), ``.npz`` (compressed NPZ) or
+        ``.tif``/``.tiff`` (a multi-page TIFF, every other key in its sidecar TOML and the truth in
+        ``NAME-truth.npz``); images are stored as float32.
+    ds, dofp_pattern, overwrite
+        As :func:`~scatterlab.io.write_dataset_hdf5`.
 
     Returns
     -------
     Path
+        The file written.
     """
     from scatterlab.io import stacks
 

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from scatterlab.io.table import (
+    ReaderOptions,
     angle_factor,
     element_columns,
     element_name,
@@ -32,6 +33,7 @@ from scatterlab.io.table import (
     length_factor,
     read_table,
     time_convention_flip,
+    wavelength_column,
 )
 
 __all__ = ["EllipsometryData", "read_ellipsometry", "write_ellipsometry", "IN_PLANE_ELEMENTS"]
@@ -128,12 +130,11 @@ def read_ellipsometry(
         non-finite cells, angles outside [0, 90] deg, elements outside [-1 - tolerance, 1 +
         tolerance], negative standard deviations, several wavelengths in one file.
     """
-    flip = time_convention_flip(time_convention)
+    opt = ReaderOptions.of(angle_unit, wavelength_unit, time_convention, tolerance)
     table = read_table(path)
     ai = table.find(_ANGLE, "theta", columns=columns)
-    fa = angle_factor(angle_unit)
-    table.check_unit(ai, "deg" if fa != 1.0 else "rad", table.names[ai], "angle_unit")
-    theta = table.values[:, ai] * fa
+    table.check_unit(ai, "deg" if opt.angle != 1.0 else "rad", table.names[ai], "angle_unit")
+    theta = table.values[:, ai] * opt.angle
     bad = (theta < 0) | (theta > np.pi / 2 + 1e-12)
     if bad.any():
         row = int(np.argmax(bad))
@@ -141,10 +142,10 @@ def read_ellipsometry(
             f"{table.where(row)}, column {table.names[ai]!r}: angle {table.values[row, ai]} "
             f"{angle_unit} is outside [0, 90] deg"
         )
-    wavelength = _wavelength(table, columns, wavelength_unit)
-    E, S = _elements(table, theta.size, tolerance)
+    wavelength = _wavelength(table, columns, opt.length)
+    E, S = _elements(table, theta.size, opt.tolerance)
     notes = []
-    if flip:
+    if opt.flip:
         E[:, 3] = -E[:, 3]
         notes.append(f"time convention {time_convention}: M23 sign-flipped to exp(+jwt)")
     return EllipsometryData(theta, E, S, wavelength, str(path), notes)
@@ -197,23 +198,17 @@ def _elements(table, n, tolerance):
     return E, S
 
 
-def _wavelength(table, columns, unit):
+def _wavelength(table, columns, factor):
     wi = table.find(_WAVELENGTH, "wavelength", required=False, columns=columns)
     if wi is None:
         return None
-    fw = length_factor(unit)
-    table.check_unit(
-        wi, {1.0: "m", 1e-3: "mm", 1e-6: "um", 1e-9: "nm"}[fw], table.names[wi], "wavelength_unit"
-    )
-    w = np.unique(table.values[:, wi])
+    w = np.unique(wavelength_column(table, wi, factor))
     if w.size != 1:
         raise ValueError(
-            f"{table.path}: several wavelengths {w.tolist()} in one ellipsometry file (one per "
-            "file)"
+            f"{table.path}: several wavelengths {(w / factor).tolist()} in one ellipsometry file "
+            "(one per file)"
         )
-    if not w[0] > 0:
-        raise ValueError(f"{table.path}, column {table.names[wi]!r}: wavelength must be > 0")
-    return float(w[0] * fw)
+    return float(w[0])
 
 
 def write_ellipsometry(

@@ -47,6 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from scatterlab.io.table import (
+    ReaderOptions,
     angle_factor,
     circular_sign,
     element_columns,
@@ -55,6 +56,7 @@ from scatterlab.io.table import (
     length_factor,
     read_table,
     time_convention_flip,
+    wavelength_column,
 )
 
 __all__ = ["MuellerBRDF", "read_mueller_brdf", "write_mueller_brdf", "MIRROR"]
@@ -244,11 +246,11 @@ def _check_elements(table, M, tolerance, where):
         )
 
 
-def _angles(table, columns, angle_unit):
+def _angles(table, columns, opt):
     """Polar angles and azimuths [rad] from the table; returns theta_i, phi_i, theta_r, phi_r,
     notes.
     """
-    f = angle_factor(angle_unit)
+    f, angle_unit = opt.angle, opt.angle_unit
     notes = []
 
     def col(what, required=True):
@@ -340,24 +342,27 @@ def read_mueller_brdf(
         F_00 or standard deviation, an element larger than F_00 beyond ``tolerance``, a unit in a
         header contradicting the arguments.
     """
-    flip = time_convention_flip(time_convention)
-    if not 0 <= float(tolerance) < 10:
-        raise ValueError(f"tolerance must be in [0, 10), got {tolerance}")
+    opt = ReaderOptions.of(angle_unit, wavelength_unit, time_convention, tolerance)
     table = read_table(path)
-    where = str(path)
     wi = table.find(ALIASES["wavelength"], "wavelength", columns=columns)
-    wf = length_factor(wavelength_unit)
-    table.check_unit(
-        wi, {1.0: "m", 1e-3: "mm", 1e-6: "um", 1e-9: "nm"}[wf], table.names[wi], "wavelength_unit"
-    )
-    wavelength = table.values[:, wi] * wf
-    if np.any(wavelength <= 0):
-        row = int(np.argmax(wavelength <= 0))
-        raise ValueError(f"{table.where(row)}, column {table.names[wi]!r}: wavelength must be > 0")
-    theta_i, phi_i, theta_r, phi_r, notes = _angles(table, columns, angle_unit)
+    wavelength = wavelength_column(table, wi, opt.length)
+    theta_i, phi_i, theta_r, phi_r, notes = _angles(table, columns, opt)
     values, stds = element_columns(table)
-    M, S, normalised = _mueller(table, values, stds, where)
-    _check_elements(table, M, float(tolerance), where)
+    M, S, normalised = _mueller(table, values, stds, str(path))
+    _check_elements(table, M, opt.tolerance, str(path))
+    theta_i, theta_r, phi, M = _project_geometry(theta_i, phi_i, theta_r, phi_r, M, notes)
+    if opt.flip:
+        M *= circular_sign()
+        notes.append(
+            f"time convention {time_convention}: circular elements sign-flipped to exp(+jwt)"
+        )
+    return MuellerBRDF(wavelength, theta_i, theta_r, phi, M, S, normalised, str(path), notes)
+
+
+def _project_geometry(theta_i, phi_i, theta_r, phi_r, M, notes):
+    """Signed polar angles and azimuths [rad] -> the project's ``theta >= 0`` and
+    ``phi = |phi_r - phi_i|`` folded to [0, pi] (``M`` mirrored where the fold reflects the
+    geometry); appends to ``notes`` what was converted. Returns theta_i, theta_r, phi, M."""
     for theta, az, what in ((theta_i, phi_i, "incidence"), (theta_r, phi_r, "observation")):
         neg = theta < 0
         if neg.any():
@@ -372,17 +377,10 @@ def read_mueller_brdf(
     if mirrored.any():
         M[mirrored] *= MIRROR
         notes.append(
-            f"{int(mirrored.sum())} rows with phi_r - phi_i in (180, 360) deg mirrored into [0, "
-            "180] "
-            f"(M -> R M R, R = diag(1, 1, -1, -1))"
+            f"{int(mirrored.sum())} rows with phi_r - phi_i in (180, 360) deg mirrored into "
+            "[0, 180] (M -> R M R, R = diag(1, 1, -1, -1))"
         )
-    if flip:
-        M *= circular_sign()
-        notes.append(
-            f"time convention {time_convention}: circular elements sign-flipped to exp(+jwt)"
-        )
-    phi = np.clip(phi, 0.0, np.pi)
-    return MuellerBRDF(wavelength, theta_i, theta_r, phi, M, S, normalised, str(path), notes)
+    return theta_i, theta_r, np.clip(phi, 0.0, np.pi), M
 
 
 # -----------------------------------------------------------------------------------------------

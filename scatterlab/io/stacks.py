@@ -46,32 +46,14 @@ def _store(v):
     return a.astype(np.float32) if a.dtype.kind == "f" and a.ndim >= 2 else a
 
 
-def write_dataset_hdf5(
-    path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
-) -> Path:
-    """Write ``ds`` to HDF5 (images gzip-compressed, as float32).
-
-    Parameters
-    ----------
-    path : str or Path
-    ds : PolarimetricDataset
-    dofp_pattern : array_like (2, 2) [deg], optional
-        Store DoFP raw frames with this 2x2 layout (four channels needed) instead of channel images.
-    overwrite : bool
-        Replace existing files (otherwise FileExistsError).
-
-    Returns
-    -------
-    Path
-        The file written (atomically).
-    """
+def _write_hdf5(path, flat: dict, overwrite: bool) -> Path:
     import h5py
 
     from scatterlab.runtime.results import atomic_write_bytes
 
     buf = io.BytesIO()
     with h5py.File(buf, "w") as f5:
-        for key, value in to_flat(ds, dofp_pattern=dofp_pattern).items():
+        for key, value in flat.items():
             a = np.asarray(value)
             if a.ndim == 0:
                 f5.attrs[key] = value
@@ -82,22 +64,7 @@ def write_dataset_hdf5(
     return atomic_write_bytes(path, buf.getvalue(), overwrite=overwrite)
 
 
-def read_dataset_hdf5(path) -> PolarimetricDataset:
-    """Read a dataset from HDF5.
-
-    Parameters
-    ----------
-    path : str or Path
-
-    Returns
-    -------
-    PolarimetricDataset
-
-    Raises
-    ------
-    ValueError
-        Not an HDF5 file, or a key missing or invalid (named with the file).
-    """
+def _read_hdf5(path) -> dict:
     import h5py
 
     try:
@@ -114,13 +81,25 @@ def read_dataset_hdf5(path) -> PolarimetricDataset:
                     if item.dtype.kind == "O"
                     else np.asarray(data)
                 )
-    return from_flat(flat, str(path))
+    return flat
 
 
-def write_dataset_npz(
-    path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False
-) -> Path:
-    """Write ``ds`` to a compressed NPZ (images as float32).
+def _write_npz(path, flat: dict, overwrite: bool) -> Path:
+    from scatterlab.runtime.results import write_npz
+
+    return write_npz(path, overwrite=overwrite, **{k: _store(v) for k, v in flat.items()})
+
+
+def _read_npz(path) -> dict:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            flat = {k: z[k] for k in z.files}
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{path}: not a readable NPZ dataset ({exc})") from None
+    return {k: (v.item() if v.ndim == 0 else v) for k, v in flat.items()}
+
+
+_WRITER_DOC = """Write ``ds`` to {what}.
 
     Parameters
     ----------
@@ -136,14 +115,8 @@ def write_dataset_npz(
     Path
         The file written (atomically).
     """
-    from scatterlab.runtime.results import write_npz
 
-    flat = {k: _store(v) for k, v in to_flat(ds, dofp_pattern=dofp_pattern).items()}
-    return write_npz(path, overwrite=overwrite, **flat)
-
-
-def read_dataset_npz(path) -> PolarimetricDataset:
-    """Read a dataset from NPZ (no pickles).
+_READER_DOC = """Read a dataset from {what}.
 
     Parameters
     ----------
@@ -156,15 +129,33 @@ def read_dataset_npz(path) -> PolarimetricDataset:
     Raises
     ------
     ValueError
-        Not a readable NPZ file, or a key missing or invalid (named with the file).
+        Not a readable {kind} file, or a key missing or invalid (named with the file).
     """
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            flat = {k: z[k] for k in z.files}
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"{path}: not a readable NPZ dataset ({exc})") from None
-    flat = {k: (v.item() if v.ndim == 0 else v) for k, v in flat.items()}
-    return from_flat(flat, str(path))
+
+
+def _file_format(name: str, what: str, write_flat, read_flat):
+    """The public writer and reader of one file format (``write_dataset_NAME``,
+    ``read_dataset_NAME``) from its backends between a file and the flat dict of
+    :func:`~scatterlab.io.dataset.to_flat`."""
+
+    def write(path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False) -> Path:
+        return write_flat(path, to_flat(ds, dofp_pattern=dofp_pattern), overwrite)
+
+    def read(path) -> PolarimetricDataset:
+        return from_flat(read_flat(path), str(path))
+
+    for f, verb, doc in ((write, "write", _WRITER_DOC), (read, "read", _READER_DOC)):
+        f.__name__ = f.__qualname__ = f"{verb}_dataset_{name}"
+        f.__doc__ = doc.format(what=what, kind=name.upper())
+    return write, read
+
+
+write_dataset_hdf5, read_dataset_hdf5 = _file_format(
+    "hdf5", "HDF5 (images gzip-compressed, as float32)", _write_hdf5, _read_hdf5
+)
+write_dataset_npz, read_dataset_npz = _file_format(
+    "npz", "a compressed NPZ (images as float32; no pickles)", _write_npz, _read_npz
+)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -192,12 +183,8 @@ def write_dataset_tiff(
 
     Parameters
     ----------
-    path : str or Path
-    ds : PolarimetricDataset
-    dofp_pattern : array_like (2, 2) [deg], optional
-        Store DoFP raw frames with this 2x2 layout (four channels needed) instead of channel images.
-    overwrite : bool
-        Replace existing files (otherwise FileExistsError).
+    path, ds, dofp_pattern, overwrite
+        As :func:`~scatterlab.io.write_dataset`.
     truth_file : str, optional
         Name of the truth NPZ beside the TIFF (default ``NAME-truth.npz``), named in the sidecar.
 

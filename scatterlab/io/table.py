@@ -39,6 +39,8 @@ __all__ = [
     "element_columns",
     "TIME_CONVENTIONS",
     "time_convention_flip",
+    "ReaderOptions",
+    "wavelength_column",
 ]
 
 ANGLE_UNITS = {"deg": np.pi / 180, "rad": 1.0}
@@ -269,6 +271,79 @@ class Table:
                 f"{self.path}: column {self.names[i]!r} is in {unit} but {argument}={expected!r}; "
                 f"pass {argument}={unit!r}"
             )
+
+
+@dataclass(frozen=True)
+class ReaderOptions:
+    """The options every table reader takes, validated (``ValueError`` naming the argument).
+
+    Attributes
+    ----------
+    angle : float
+        Radians per unit of the angle columns (``angle_unit``: ``"deg"`` or ``"rad"``).
+    length : float
+        Metres per unit of the wavelength column (``wavelength_unit``: m, mm, um, nm).
+    flip : bool
+        The file's time convention is ``exp(-iwt)``: circular elements change sign.
+    tolerance : float
+        How far (a fraction, in [0, 10)) elements may exceed their bound before a file is refused.
+    angle_unit : str
+        The angle unit as given (for messages).
+    """
+
+    angle: float
+    length: float
+    flip: bool
+    tolerance: float
+    angle_unit: str
+
+    @classmethod
+    def of(cls, angle_unit, wavelength_unit, time_convention, tolerance) -> "ReaderOptions":
+        """Validate the reader arguments of the same names.
+
+        Parameters
+        ----------
+        angle_unit, wavelength_unit, time_convention : str
+        tolerance : float
+
+        Returns
+        -------
+        ReaderOptions
+        """
+        if not 0 <= float(tolerance) < 10:
+            raise ValueError(f"tolerance must be in [0, 10), got {tolerance}")
+        return cls(
+            angle_factor(angle_unit),
+            length_factor(wavelength_unit),
+            time_convention_flip(time_convention),
+            float(tolerance),
+            str(angle_unit),
+        )
+
+
+def wavelength_column(table: "Table", i: int, factor: float) -> np.ndarray:
+    """Column ``i`` of ``table`` as wavelengths [m], checked against a unit in its header and > 0.
+
+    Parameters
+    ----------
+    table : Table
+    i : int
+        Column index.
+    factor : float
+        Metres per unit of the column (:func:`length_factor`).
+
+    Returns
+    -------
+    ndarray, shape (rows,)
+        Wavelengths [m].
+    """
+    unit = {v: k for k, v in LENGTH_UNITS.items()}[factor]
+    table.check_unit(i, unit, table.names[i], "wavelength_unit")
+    w = table.values[:, i] * factor
+    if np.any(w <= 0):
+        row = int(np.argmax(w <= 0))
+        raise ValueError(f"{table.where(row)}, column {table.names[i]!r}: wavelength must be > 0")
+    return w
 
 
 def _split(line: str, delimiter):

@@ -198,3 +198,68 @@ def test_a_scene_toml_is_not_a_dataset(tmp_path):
     scene.write_text("image_size = 64\ngeometry_deg = [30, 50]\n")
     with pytest.raises(ValueError, match="expected a dataset.*scene description"):
         read_dataset(scene)
+
+
+def _sidecar_stack(tmp_path, dofp=False):
+    """A TIFF stack (channels, or DoFP raw frames) and its sidecar."""
+    from scatterlab.io import SONY_POLARSENS
+
+    path = write_dataset_tiff(
+        tmp_path / "s.tif", small(truth=False), dofp_pattern=SONY_POLARSENS if dofp else None
+    )
+    return path, path.with_suffix(".toml")
+
+
+@pytest.mark.parametrize(
+    "dofp, old, new, message",
+    [
+        (False, 'layout = "channels"', 'layout = "bayer"', "layout must be 'channels' or 'dofp'"),
+        (False, "wavelength_um = ", "wavelength_nm = ", "missing 'wavelength_um'"),
+        (False, "theta_deg = [40.0", "theta_deg = [nan", "'theta_deg' contains NaN"),
+        (False, "theta_deg = [40.0", "theta_deg = [-40.0", r"'theta_deg' must be in \(0, 90\)"),
+        (True, "theta_deg = [40.0, ", "theta_deg = [", "2 DoFP frames for 1 geometries"),
+        (True, "dofp_pattern_deg = [[", "dofp_pattern_deg = [[0.0, ", "2x2"),
+        (True, "dofp_pattern_deg = ", "pattern = ", "need 'dofp_pattern_deg'"),
+    ],
+)
+def test_bad_sidecars_name_the_problem(tmp_path, dofp, old, new, message):
+    """Every TIFF-sidecar field the reader needs: an unknown layout, a missing key, NaN, angles out of
+    range, a frame count that does not match the geometries, a DoFP layout of the wrong shape."""
+    path, side = _sidecar_stack(tmp_path, dofp)
+    text = side.read_text()
+    assert old in text
+    side.write_text(text.replace(old, new, 1))
+    with pytest.raises(ValueError, match=message) as err:
+        read_dataset(path)
+    assert "s.toml" in str(err.value)
+
+
+def test_bad_hdf5_and_dofp_frames_name_the_problem(tmp_path):
+    """The HDF5 reader validates as the others do (a missing key, NaN images), and DoFP raw frames
+    of the wrong shape (2-D, odd sizes) are refused with the file named."""
+    import h5py
+
+    from scatterlab.io import SONY_POLARSENS, write_dataset_hdf5
+
+    path = write_dataset_hdf5(tmp_path / "d.h5", small(truth=False))
+    with h5py.File(path, "a") as f5:
+        del f5["theta_deg"]
+    with pytest.raises(ValueError, match="d.h5: missing 'theta_deg'"):
+        read_dataset(path)
+    path = write_dataset_hdf5(tmp_path / "n.h5", small(truth=False), overwrite=True)
+    with h5py.File(path, "a") as f5:
+        f5["counts"][0, 0, 0, 0] = np.nan
+    with pytest.raises(ValueError, match="n.h5: 'counts' contains NaN"):
+        read_dataset(path)
+    raw = write_dataset_hdf5(tmp_path / "r.h5", small(truth=False), dofp_pattern=SONY_POLARSENS)
+    with h5py.File(raw, "a") as f5:
+        frames = f5["raw"][()]
+        del f5["raw"]
+        f5["raw"] = frames[:, :-1, :]
+    with pytest.raises(ValueError, match="r.h5.*even"):
+        read_dataset(raw)
+    with h5py.File(raw, "a") as f5:
+        del f5["raw"]
+        f5["raw"] = frames[0]
+    with pytest.raises(ValueError, match="r.h5: 'raw' must have 3 dimensions"):
+        read_dataset(raw)

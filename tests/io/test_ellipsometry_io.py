@@ -64,6 +64,9 @@ def test_zero_based_names_absolute_first_element_and_radians(tmp_path):
         ("theta,m12,m22,m33,m34", "95,0,1,1,0", "line 2, column 'theta'.*outside"),
         ("theta,m12,m22,m33,m34", "10,0,1,1.5,0", "line 2, column 'm33'.*outside \\[-1, 1\\]"),
         ("theta,m12,m22,m33,m34", "10,0,1,inf,0", "line 2, column 'm33'.*not a finite"),
+        ("theta,m12,m22,m33,m34", "10,0,nan,1,0", "line 2, column 'm22'.*not a finite"),
+        ("theta,m12,m22,m33,m34", "10,0,1,1", "line 2: 4 values for 5 columns"),
+        ("theta,m12,m22,m33,m34", "-5,0,1,1,0", "line 2, column 'theta'.*outside"),
         (
             "theta,m12,m22,m33,m34,std_m12,std_m22,std_m33,std_m34",
             "10,0,1,1,0,0.1,-0.1,0.1,0.1",
@@ -78,6 +81,18 @@ def test_bad_files(tmp_path, header, row, message):
     path.write_text(header + "\n" + row + "\n")
     with pytest.raises(ValueError, match=message):
         read_ellipsometry(path)
+
+
+def test_bad_options_name_the_argument(tmp_path):
+    path = tmp_path / "e.csv"
+    path.write_text("theta,m12,m22,m33,m34\n10,0,1,1,0\n")
+    for kw, name in (
+        ({"angle_unit": "grad"}, "angle_unit"),
+        ({"wavelength_unit": "inch"}, "wavelength_unit"),
+        ({"time_convention": "exp(iwt)?"}, "time_convention"),
+    ):
+        with pytest.raises(ValueError, match=name):
+            read_ellipsometry(path, **kw)
 
 
 def test_columns_mapping(tmp_path):
