@@ -193,7 +193,7 @@ class PolarimetricDataset:
         return self.counts.shape
 
     def stokes(self) -> np.ndarray:
-        """Least-squares linear Stokes images of the (blurred, noisy) data (G, 3, H, W) [e-]."""
+        """Least-squares linear Stokes images of the (blurred, noisy) data (G, H, W, 3) [e-]."""
         from scatterlab.imaging import stokes_from_channels
 
         return np.stack([stokes_from_channels(c, self.polarizer_angles) for c in self.counts])

@@ -17,7 +17,8 @@ from scatterlab.io import (
 def small(rng=0, truth=True, G=2, H=6, W=8):
     rng = np.random.default_rng(rng)
     S = np.stack(
-        [np.full((H, W), 100.0), rng.uniform(-30, 30, (H, W)), rng.uniform(-30, 30, (H, W))]
+        [np.full((H, W), 100.0), rng.uniform(-30, 30, (H, W)), rng.uniform(-30, 30, (H, W))],
+        axis=-1,
     )
     counts = np.stack([channel_images(S * (g + 1), ANGLES_0_45_90_135) for g in range(G)])
     t = None
@@ -91,7 +92,7 @@ def test_dofp_demosaic_layout_and_stokes():
             raw[i::2, j::2] = 0.5 * (S[0] + S[1] * np.cos(2 * a) + S[2] * np.sin(2 * a))
     ch, ang = demosaic(raw, pattern)
     assert ch.shape == (4, 2, 3) and np.degrees(ang) == pytest.approx([0, 45, 90, 135])
-    np.testing.assert_allclose(stokes_from_channels(ch, ang)[:, 0, 0], S, atol=1e-15)
+    np.testing.assert_allclose(stokes_from_channels(ch, ang)[0, 0], S, atol=1e-15)
     np.testing.assert_array_equal(mosaic(ch, ang, pattern), raw)
 
 
@@ -190,7 +191,7 @@ def test_users_tiff_stack_with_one_file_per_geometry_and_a_minimal_sidecar(tmp_p
     back = read_dataset(tmp_path / "plate.toml")
     np.testing.assert_allclose(back.counts, ds.counts, rtol=1e-6)
     assert back.truth is None and not back.simulated and back.read_noise is None
-    assert back.stokes().shape == (2, 3, 6, 8)
+    assert back.stokes().shape == (2, 6, 8, 3)
 
 
 def test_a_scene_toml_is_not_a_dataset(tmp_path):
