@@ -23,6 +23,7 @@ from scatterlab.inversion.least_squares import (
     fit_dolp_per_pixel,
     model_dolp,
 )
+from scatterlab.inversion.model_error import dolp_model_error, dolp_model_error_covariance
 from scatterlab.inversion.posterior import (
     ConvergenceWarning,
     Posterior,
@@ -62,4 +63,6 @@ __all__ = [
     "fisher_information",
     "crlb",
     "inverse_information",
+    "dolp_model_error",
+    "dolp_model_error_covariance",
 ]

@@ -17,6 +17,7 @@ from scatterlab.pbrdf.dhr import (
 from scatterlab.pbrdf.distributions import Beckmann, FacetDistribution, HyperCauchy
 from scatterlab.pbrdf.dolp import dolp_smooth_facet, dolp_thilak, facet_dolp, facet_jones
 from scatterlab.pbrdf.geometry import FacetGeometry, facet_geometry, in_plane_geometry
+from scatterlab.pbrdf.inplane import dhr_pec_1d, dolp_1d, inplane_coefficients
 from scatterlab.pbrdf.model import DIFFUSE, PEC, Model
 from scatterlab.pbrdf.shadowing import (
     NO_SHADOWING,
@@ -53,4 +54,7 @@ __all__ = [
     "dolp_thilak",
     "facet_dolp",
     "facet_jones",
+    "dhr_pec_1d",
+    "dolp_1d",
+    "inplane_coefficients",
 ]
