@@ -265,7 +265,9 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
     return RegionEstimate(name, params, converged, notes, post.chain, data)
 
 
-def region_posteriors(regions, thetas, sigma, rng, *, n_steps=None, executor=None) -> list:
+def region_posteriors(
+    regions, thetas, sigma, rng, *, n_steps=None, executor=None, model_error=False
+) -> list:
     """Sample the posterior of (n, kappa) for each :class:`RegionData` (one emcee problem per region).
 
     Parameters
@@ -280,6 +282,10 @@ def region_posteriors(regions, thetas, sigma, rng, *, n_steps=None, executor=Non
         Fixed chain length (None: until converged).
     executor : optional
         Runs the regions in parallel.
+    model_error : bool
+        Add the pBRDF's DOLP model error measured against exact (MoM) solutions
+        (:func:`scatterlab.inversion.dolp_model_error` at the known ``sigma``, material unknown) to each
+        geometry's error. Right for measured data; a simulation rendered with the pBRDF itself has none.
 
     Returns
     -------
@@ -290,6 +296,10 @@ def region_posteriors(regions, thetas, sigma, rng, *, n_steps=None, executor=Non
     thetas = np.asarray(thetas, float)
     means = np.stack([r.mean for r in regions])
     errors = np.stack([r.error for r in regions])
+    if model_error:
+        from scatterlab.inversion import dolp_model_error
+
+        errors = np.hypot(errors, dolp_model_error(thetas, thetas, sigma)[None, :])
     kw = dict(sigma=sigma, n_steps=n_steps, executor=executor)
     noise = None
     if thetas.size < 3:  # (n, kappa) from two geometries: no data left to infer a noise level

@@ -198,6 +198,7 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
                 rng,
                 n_steps=cfg.posterior_steps,
                 executor=executor,
+                model_error=cfg.model_error,
             )
             for r in est["regions"]:
                 name = plate.metal if r.name == "metal" else r.name

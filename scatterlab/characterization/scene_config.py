@@ -19,6 +19,8 @@ estimate = ["classes", "n_kappa", "posterior"]   # what to compute (leave out wh
 sigma_known = 0.3                     # roughness used by the n, kappa inversion (the reference measured it)
 posterior_steps = 1500
 calibration_replicates = 2            # re-simulations per geometry that calibrate a blind restoration's bias
+model_error = false                   # add the pBRDF's DOLP model error measured against the MoM (issue 17) to
+                                      # the region errors: off for simulations rendered by the pBRDF itself
 seed = 20101210
 plate_zoom = 4.0                      # template magnification: 1 = the whole "st"; 2 = the text's field of
 plate_center = [7.2, 8.5]             # Figs. 49-52 (right of the "s", left of the "t") on 256 px; 4 = the
@@ -101,6 +103,7 @@ class SceneConfig:
     sigma_known: float = 0.3
     posterior_steps: int = 1500
     calibration_replicates: int = 2
+    model_error: bool = False
     seed: int = 20101210
     plate_zoom: float = 4.0
     plate_center: list = field(default_factory=lambda: [7.2, 8.5])

@@ -241,3 +241,24 @@ def test_bootstrap_needs_a_positive_turbulence_strength():
             blind=True,
             d_over_r0=-1.0,
         )
+
+
+def test_model_error_widens_the_region_posterior():
+    """The MoM-measured model error (issue 17) enters each geometry's error: with it, the posterior of a
+    region whose DOLP is known to 0.002 is wider, and a wrong type for the scene key is refused."""
+    from scatterlab.characterization.estimation import RegionData, region_posteriors
+    from scatterlab.inversion import model_dolp
+
+    th = np.radians([30.0, 40.0, 50.0, 60.0])
+    y = np.asarray(model_dolp(1.5, 0.1, 0.3, th, th), float)
+    r = RegionData("paint", y, np.full(4, 0.002), np.full(4, 0.002), np.zeros(4), 100, (1.5, 0.1))
+    widths = []
+    for me in (False, True):
+        est = region_posteriors([r], th, 0.3, np.random.default_rng(3), n_steps=400, model_error=me)
+        lo, hi = est[0].parameters["n"]["ci68"]
+        widths.append(hi - lo)
+    assert widths[1] > 2 * widths[0], widths
+    from scatterlab.characterization import SceneConfig
+
+    with pytest.raises(ValueError, match="model_error"):
+        SceneConfig(model_error="yes").validate()
