@@ -331,7 +331,7 @@ def _verdict(metrics_json: Path, reproduces: str) -> tuple[str, str]:
         m = json.loads(metrics_json.read_text())["metrics"]
     except (OSError, ValueError, KeyError):
         return "not run", ""
-    default = "own study" if reproduces.startswith("own") else "not stated"
+    default = "own study" if reproduces.lower().startswith(("own", "our")) else "not stated"
     headline = str(m.get("headline", "")).replace("|", "/").replace("\n", " ")
     return str(m.get("verdict", default)), headline
 

@@ -5,6 +5,7 @@ sweeping theta_r at fixed theta_i. Bounds for DOLP noise 1e-3, 7 measurements pe
 """
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.inversion import crlb
 from scatterlab.plotting import headless_pyplot as plt
@@ -96,4 +97,14 @@ def run(ctx):
         "bound is infinite at kappa = 0 (the DOLP is stationary there). The best 7-angle theta_r sweep for "
         f"iron at sigma = 0.1 spans {m['best_sweep_deg'][0]:.0f}-{m['best_sweep_deg'][1]:.0f} deg "
         f"(bound {m['best_sweep_sigma_bound']:.2g})."
+    )
+    holds = all(
+        m[k]["sigma_bound_at_0.1"]["specular"] > m[k]["sigma_bound_at_0.1"]["off"]
+        for k in ("iron", "paint")
+    )
+    set_verdict(
+        ctx,
+        "reproduced" if holds else "not reproduced",
+        f"sigma bound at sigma 0.1, specular vs theta_r sweep: iron "
+        f"{m['iron']['sigma_bound_at_0.1']['specular']:.3g} vs {m['iron']['sigma_bound_at_0.1']['off']:.3g}",
     )

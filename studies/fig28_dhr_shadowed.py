@@ -5,7 +5,7 @@ slope" read as sigma = tan(n deg). The reference states that the shadowed DHRs n
 """
 
 import numpy as np
-from scatterlab.studies._common import rms_slope_from_degrees
+from scatterlab.studies._common import rms_slope_from_degrees, set_verdict
 
 from scatterlab.pbrdf import dhr_beckmann
 from scatterlab.plotting import headless_pyplot as plt
@@ -50,4 +50,12 @@ def run(ctx):
         "V-groove function a grazing beam is intercepted by facets facing the source at twice their "
         "projected efficiency (G_c q = 2 on half the facets). The missing energy (1 - DHR) is what the diffuse "
         "term restores."
+    )
+    m = ctx.metrics
+    ok = max(m["max_dhr_shadowed_10_deg"], m["max_dhr_shadowed_20_deg"]) <= 1.0 + 1e-9
+    set_verdict(
+        ctx,
+        "reproduced" if ok else "not reproduced",
+        f"shadowed DHR max {max(m['max_dhr_shadowed_10_deg'], m['max_dhr_shadowed_20_deg']):.6f} "
+        f"(text: never above 1); unshadowed {m['max_dhr_unshadowed_10_deg']:.2f}",
     )
