@@ -16,7 +16,8 @@ likelihood with the true noise): its 68 % highest-density region, and the 68 % l
 (Wilks, chi^2 with 2 degrees of freedom) confidence region of the same likelihood, are checked for
 coverage of the true (n, kappa).
 
-Run time: quick (40 trials per case) about 20 s; full (500/200 trials) about 3 min on one core.
+Run time: quick (24 trials per case) 55 s measured at load ~9 on the shared 2-core machine;
+full (500/200 trials): FULL_TIME.
 """
 
 import numpy as np
