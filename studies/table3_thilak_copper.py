@@ -74,6 +74,7 @@ def run(ctx):
     pub_bias_n = np.mean([r["n_est"] - ACCEPTED[0] for r in rows])
     tr_dev = [abs(r["theta_r_est"] - r["theta_r"]) for r in rows]
     tr_sd = [m[f"theta_r_{r['theta_r']:g}_low"]["sd"][2] for r in rows]
+    hi = [m[f"theta_r_{r['theta_r']:g}_high"]["sd"] for r in rows]
     m["median_bias_n_low"] = float(low_bias_n)
     m["published_bias_n"] = float(pub_bias_n)
     ctx.say(
@@ -84,9 +85,9 @@ def run(ctx):
         + " deg where the low noise alone scatters it by "
         + ", ".join(f"{v:.2f}" for v in tr_sd)
         + " deg (sd), the high noise level by "
-        + ", ".join(f"{m[f'theta_r_{r['theta_r']:g}_high']['sd'][2]:.2f}" for r in rows)
+        + ", ".join(f"{h[2]:.2f}" for h in hi)
         + " deg; at that level the two-step n scatters by "
-        + ", ".join(f"{m[f'theta_r_{r['theta_r']:g}_high']['sd'][0]:.2g}" for r in rows)
+        + ", ".join(f"{h[0]:.2g}" for h in hi)
         + " (sd), far more than the published values' spread (0.51-0.54). Bias of n: published "
         f"{pub_bias_n:+.3f} at every angle; simulated median (low noise) {low_bias_n:+.3f}. "
         + (
