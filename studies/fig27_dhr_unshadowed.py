@@ -4,6 +4,8 @@ The reference integrates the unshadowed model over the whole sphere (its DHR the
 below the surface"). We show that closed form, Phi(cot/sigma) + sigma tan(theta) phi(cot/sigma), and the
 upper-hemisphere integral (Eq. 174 with G = 1) by quadrature. Roughness "n deg rms slope" is read as the
 per-axis rms slope sigma = tan(n deg).
+
+Run time, measured on the shared 2-core machine at load ~14: quick 12 s, full 6 s.
 """
 
 import numpy as np

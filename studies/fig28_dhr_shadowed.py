@@ -2,6 +2,8 @@
 
 Upper-hemisphere DHR (Eq. 174) by the slope-space quadrature of scatterlab.pbrdf.dhr; roughness "n deg rms
 slope" read as sigma = tan(n deg). The reference states that the shadowed DHRs never exceed 1.
+
+Run time, measured on the shared 2-core machine at load ~14: quick 16 s, full 21 s.
 """
 
 import numpy as np

@@ -1,4 +1,7 @@
-"""Fig. 37: F00 of the Priest-Germer pBRDF vs the shadowed pBRDF (Eq. 173), specular plane, PEC, roughness 0.3."""
+"""Fig. 37: F00 of the Priest-Germer pBRDF vs the shadowed pBRDF (Eq. 173), specular plane, PEC, roughness 0.3.
+
+Run time, measured on the shared 2-core machine at load ~14: quick 24 s, full 10 s.
+"""
 
 import numpy as np
 from scatterlab.studies._common import set_verdict

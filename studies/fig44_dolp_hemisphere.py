@@ -2,6 +2,8 @@
 roughness 0.1 and 0.6, with the shadowed pBRDF and its diffuse term (Eq. 177); plus a pyvista 3-D lobe.
 
 Indices as in the figure caption: Al 1.44 - j16, Fe 3.60 - j5.88, glass 1.44, Teflon 1.35.
+
+Run time, measured on the shared 2-core machine at load ~14: quick 37 s, full 38 s.
 """
 
 import numpy as np

@@ -6,6 +6,8 @@ qualitative statements (Rs > Rp over nearly all angles; Rp of glass vanishes
 at the Brewster angle; iron's Rp has a non-zero minimum at its pseudo-Brewster
 angle) and the analytic anchors (Rs = Rp at normal incidence, R -> 1 at
 grazing).
+
+Run time, measured on the shared 2-core machine at load ~14: quick 17 s, full 4 s.
 """
 
 import numpy as np

@@ -2,6 +2,8 @@
 iron group (Fe, Ti, Ni, Cr) and dielectrics (Teflon, glass, alumina), from the catalogue at 1550 nm.
 
 The reference does not state the roughness of Fig. 53a; we use 0.3 (and report 0.1 too).
+
+Run time, measured on the shared 2-core machine at load ~14: quick 5.5 s, full 4 s.
 """
 
 import numpy as np
