@@ -72,29 +72,38 @@ def _stats(x, truth):
     }
 
 
-def _coverage(y, ti, sd, quick):
+def _coverage(y, ti, sd, quick, chunk=64):
     """Coverage of the true (n, kappa) by the 68 % HPD region of the grid posterior (flat prior on
-    the box) and by the 68 % likelihood-ratio region (chi^2_2 = 2.30), for the trials ``y`` (K, M).
-    Also the posterior medians (K, 2)."""
+    the box) and by the 68 % likelihood-ratio region (chi^2_2 = 2.30), for the trials ``y`` (K, M),
+    in chunks of ``chunk`` trials (memory). Also the posterior medians (K, 2)."""
     grid_n, grid_k = (np.linspace(0.0, hi, k) for hi, k in zip((5.0, 25.0), GRIDS[quick]))
     beta = (ti + THETA_R) / 2
     g = thilak_dop(grid_n[:, None, None], grid_k[None, :, None], beta).reshape(-1, ti.size)
+    parts = [
+        _coverage_chunk(y[i : i + chunk], g, beta, sd, grid_n, grid_k)
+        for i in range(0, len(y), chunk)
+    ]
+    hpd, lr, med = (np.concatenate(x) for x in zip(*parts))
+    return float(hpd.mean()), float(lr.mean()), med
+
+
+def _coverage_chunk(y, g, beta, sd, grid_n, grid_k):
     chi2 = ((g**2).sum(1)[:, None] - 2 * g @ y.T + (y**2).sum(1)[None, :]) / sd**2  # (G, K)
     chi2_true = (((thilak_dop(*COPPER, beta) - y) ** 2).sum(1)) / sd**2
     chi2_min = np.minimum(chi2.min(0), chi2_true)
     lr = chi2_true - chi2_min <= 2.30
     w = np.exp(-(chi2 - chi2_min) / 2)
-    w /= w.sum(0)
+    total = w.sum(0)
+    w /= total
     ws = -np.sort(-w, axis=0)
-    cum = np.cumsum(ws, axis=0)
-    thresh = ws[np.argmax(cum >= 0.68, axis=0), np.arange(y.shape[0])]
-    hpd = np.exp(-(chi2_true - chi2_min) / 2) / np.exp(-(chi2 - chi2_min) / 2).sum(0) >= thresh
+    thresh = ws[np.argmax(np.cumsum(ws, axis=0) >= 0.68, axis=0), np.arange(y.shape[0])]
+    hpd = np.exp(-(chi2_true - chi2_min) / 2) / total >= thresh
     wn = w.reshape(grid_n.size, grid_k.size, -1)
     med = [
         [grid[np.searchsorted(np.cumsum(m[:, k]), 0.5)] for k in range(y.shape[0])]
         for grid, m in ((grid_n, wn.sum(1)), (grid_k, wn.sum(0)))
     ]
-    return float(hpd.mean()), float(lr.mean()), np.array(med).T
+    return hpd, lr, np.array(med).T
 
 
 def _simulate(key, level, trials, rng, reading="variance = f Pmax (text)"):
