@@ -6,7 +6,9 @@ have sigma < 1 deg), specular angles 30-60 deg in 5 deg steps, per-pixel DOLP no
 0.01. Per pixel: batched bounded least squares (the reference's interior-reflective Newton on n in [0, 5],
 kappa in [0, 25]); per region: the posterior of the region's mean DOLP (noise 0.01/sqrt(pixels)), with its
 uncertainty report. Compared with Table 5's no-turbulence rows (measured, so also affected by oxidation and
-calibration; see the report). Run time: quick 82 s measured at load ~15 on the shared 2-core machine; full (2000 pixels
+calibration; see the report).
+
+Run time: quick 82-98 s (400 steps) measured at load ~12-15 on the shared 2-core machine; full (2000 pixels
 per region): not timed in this revision.
 """
 
@@ -56,7 +58,7 @@ def run(ctx):
             NOISE / np.sqrt(pixels),
             rng,
             sigma=SIGMA,
-            n_steps=400 if ctx.quick else None,
+            n_steps=300 if ctx.quick else None,
             executor=ctx.executor,
         )
     lines = [

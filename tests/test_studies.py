@@ -12,7 +12,7 @@ ALL = studies.discover()
 
 
 @pytest.mark.parametrize("sid", list(ALL))
-def test_study_runs_in_quick_mode(sid, tmp_path, record_property):
+def test_study_runs_in_quick_mode(sid, tmp_path, record_testsuite_property):
     report = studies.run_study(sid, tmp_path / sid, quick=True, seed=7)
     assert report.exists()
     text = report.read_text()
@@ -21,7 +21,7 @@ def test_study_runs_in_quick_mode(sid, tmp_path, record_property):
     assert m["seed"] == 7 and m["mode"] == "quick"
     assert m["run_time_s"]["total"] > 0
     # the quick-mode time is recorded (junit XML with --junitxml), never asserted: it depends on load
-    record_property("quick_run_time_s", round(m["run_time_s"]["total"], 2))
+    record_testsuite_property(f"quick_run_time_s[{sid}]", round(m["run_time_s"]["total"], 2))
     assert "numpy" in m["versions"]
     assert m["metrics"]
     verdict = m["metrics"].get("verdict")
