@@ -161,7 +161,7 @@ def run(ctx):
         "reproduced"
         if inside == len(cmp)
         else "partly"
-        if inside or sum(dominant)
+        if inside or 2 * sum(dominant) >= len(dominant)
         else "not reproduced",
         f"total error {min(ratio):.1f}-{max(ratio):.1f} x published (0.040-0.058); {inside}/{len(cmp)} "
         f"inside 2u; dominant error type as published in {sum(dominant)}/{len(dominant)}",
