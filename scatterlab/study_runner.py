@@ -310,6 +310,32 @@ def run_study(
     return write_text(out / "report.md", report, overwrite=True)
 
 
+def _verdict(metrics_json: Path, reproduces: str) -> tuple[str, str]:
+    """The verdict and headline a study recorded in its metrics (index page columns).
+
+    Parameters
+    ----------
+    metrics_json : Path
+        The study's ``metrics.json`` (may be missing when the study failed).
+    reproduces : str
+        The study's ``STUDY["reproduces"]``; "own study" when it reproduces nothing.
+
+    Returns
+    -------
+    (verdict, headline) : tuple of str
+        "not run" when there are no metrics; "not stated" when the study recorded no verdict.
+    """
+    import json
+
+    try:
+        m = json.loads(metrics_json.read_text())["metrics"]
+    except (OSError, ValueError, KeyError):
+        return "not run", ""
+    default = "own study" if reproduces.lower().startswith(("own", "our")) else "not stated"
+    headline = str(m.get("headline", "")).replace("|", "/").replace("\n", " ")
+    return str(m.get("verdict", default)), headline
+
+
 def run_all(
     out=None,
     *,
@@ -339,13 +365,17 @@ def run_all(
             if status[sid] == "ok"
             else f"{sid} ([error]({sid}/error.txt))"
         )
-        rows.append(f"| {link} | {study.title} | {study.reproduces} | {status[sid]} | {dt:.1f} |")
+        verdict, headline = _verdict(out / sid / "metrics.json", study.reproduces)
+        rows.append(
+            f"| {study.reproduces} | {link} | {verdict} | {headline} | {status[sid]} | {dt:.1f} |"
+        )
     index = (
         "# scatterlab studies\n\n"
-        f"Mode: {'quick' if quick else 'full'}, seed {seed}.\n\n"
-        "| study | title | reproduces | status | time [s] |\n|---|---|---|---|---|\n"
-        + "\n".join(rows)
-        + "\n"
+        f"Mode: {'quick' if quick else 'full'}, seed {seed}. One line per study: the figure or "
+        "table it reproduces, the verdict (reproduced / partly / not reproduced / own study) and "
+        "the headline agreement number, both taken from the study's `metrics.json`.\n\n"
+        "| reproduces | study | verdict | headline | status | time [s] |\n"
+        "|---|---|---|---|---|---|\n" + "\n".join(rows) + "\n"
     )
     path = write_text(out / "index.md", index, overwrite=True)
     return path, status

@@ -175,6 +175,12 @@ def mueller_figure_study(ctx, eta, sigma, label, published_fit, literature_name)
         "measurement chain and the fit (a few 1e-3 in eta here), far smaller than the "
         "differences the reference reports."
     )
+    set_verdict(
+        ctx,
+        "partly",
+        f"synthetic chain recovers eta to |d eta| {abs(fit.eta - eta):.1e}; the published real-data "
+        f"fit {published_fit} is not reproducible from synthetic data",
+    )
 
 
 def plate_observations(
@@ -248,3 +254,78 @@ def plate_observations(
 
 def _image(img, classes, priors):
     return {"s0": img.s0, "dolp": np.nan_to_num(img.dolp), "classes": classes, "priors": priors}
+
+
+VERDICTS = ("reproduced", "partly", "not reproduced", "own study")
+
+
+def set_verdict(ctx, verdict, headline):
+    """Record the study's verdict and headline agreement number for the index page.
+
+    Parameters
+    ----------
+    ctx : StudyContext
+        The study's context; ``ctx.metrics["verdict"]`` and ``ctx.metrics["headline"]`` are set.
+    verdict : str
+        One of :data:`VERDICTS`: "reproduced" (every compared number inside its combined
+        uncertainty or the stated tolerance), "partly", "not reproduced", "own study".
+    headline : str
+        One short line with the headline agreement number (published, ours, difference).
+
+    Returns
+    -------
+    None
+    """
+    if verdict not in VERDICTS:
+        raise ValueError(f"verdict must be one of {VERDICTS}, got {verdict!r}")
+    ctx.metrics["verdict"] = verdict
+    ctx.metrics["headline"] = str(headline)
+
+
+def compare(name, published, ours, u_published=0.0, u_ours=0.0, k=2.0, tol=0.0):
+    """A like-for-like comparison of one number with its published value.
+
+    Parameters
+    ----------
+    name : str
+        What is compared (used in the sentence).
+    published, ours : float
+        The published value and ours.
+    u_published, u_ours : float
+        Their standard uncertainties (0 where none is known: a value read from a plot gets
+        its reading error, an exact model value 0).
+    k : float
+        Coverage factor of the combined uncertainty (default 2, about 95 %).
+    tol : float
+        A stated absolute tolerance added to the allowed band (e.g. the reading error of a
+        curve read off a printed figure); 0 for none.
+
+    Returns
+    -------
+    dict
+        ``name, published, ours, diff`` (ours - published), ``u_combined``
+        (sqrt(u_p^2 + u_o^2)), ``band`` (k u_combined + tol), ``inside`` (|diff| <= band) and
+        ``text``, one sentence stating all of them.
+    """
+    published, ours = float(published), float(ours)
+    u = float(np.hypot(u_published, u_ours))
+    band = k * u + tol
+    diff = ours - published
+    inside = bool(np.isfinite(diff) and abs(diff) <= band)
+    rel = f" ({diff / published:+.1%})" if published else ""
+    text = (
+        f"{name}: published {published:.4g}, ours {ours:.4g}, difference {diff:+.3g}{rel}; "
+        f"allowed band {band:.3g} (k = {k:g} x combined u {u:.3g}"
+        + (f" + tolerance {tol:.3g}" if tol else "")
+        + f"): {'inside' if inside else 'OUTSIDE'}."
+    )
+    return {
+        "name": name,
+        "published": published,
+        "ours": ours,
+        "diff": diff,
+        "u_combined": u,
+        "band": band,
+        "inside": inside,
+        "text": text,
+    }

@@ -4,6 +4,8 @@ Lossless materials: Brewster angle arctan(n) (Eq. 85), where R_p = 0.
 Absorbing materials: the pseudo-Brewster angle, the minimum of R_p, found by
 bounded Brent minimisation; its R_p minimum is reported too. Own study (the
 reference text uses these angles in Sec. 3.1.1 but tabulates none).
+
+Run time, measured on the shared 2-core machine at load ~14: full 3 s.
 """
 
 import numpy as np

@@ -2,9 +2,12 @@
 iron group (Fe, Ti, Ni, Cr) and dielectrics (Teflon, glass, alumina), from the catalogue at 1550 nm.
 
 The reference does not state the roughness of Fig. 53a; we use 0.3 (and report 0.1 too).
+
+Run time, measured on the shared 2-core machine at load ~14: quick 5.5 s, full 4 s.
 """
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab import materials
 from scatterlab.pbrdf import Model
@@ -92,3 +95,11 @@ def run(ctx):
                 else "Some iron-group DOLPs leave the band even between 30 and 60 deg."
             )
         )
+    al_max = m["group_max_dolp_aluminium group_sigma0.3"]
+    set_verdict(
+        ctx,
+        "reproduced" if not outside and al_max < 0.1 else "partly",
+        f"Al group peak DOLP {al_max:.3f} (text << 0.1); iron group peaks "
+        f"{m['group_min_peak_dolp_iron group_sigma0.3']:.2f}-{m['group_max_dolp_iron group_sigma0.3']:.2f} "
+        f"(text band 0.07-0.3){'; outside: ' + ', '.join(outside) if outside else ''}",
+    )

@@ -3,6 +3,7 @@ at D/r0 = 7.9, 10.5, 12.9: clean and turbulence-degraded S0 and DOLP through a 4
 polarimeter with shot, read and dark noise (Figs. 49-50 scenes)."""
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.imaging import (
     ANGLES_0_45_90_135,
@@ -81,4 +82,10 @@ def run(ctx):
             f"{k.split('_', 2)[2]}: {v:.3f}" for k, v in m.items() if k.startswith("dolp_rmse")
         )
         + ". These are the data the deconvolution of issue 8 must undo."
+    )
+    set_verdict(
+        ctx,
+        "partly",
+        f"scene only (no published numbers): metal {m['brightness_metal_over_paint_aluminium']:.0f}x "
+        f"brighter than paint (Al); clean DOLP paint {m['clean_dolp_paint_aluminium']:.2f}",
     )

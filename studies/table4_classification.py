@@ -5,10 +5,21 @@ Simulated plates (the reference's were measured): green paint on aluminium and o
 and "t" strokes and scratches, sigma 0.3, 1550 nm, 4-channel division-of-amplitude polarimeter, one Kolmogorov
 screen per acquisition. As in the text the no-turbulence classification is the truth of Table 4's columns; the
 true labels are scored too. Each D/r0 is repeated over independent screens (mean and spread reported).
+
+Like for like: the text's "wrongly metal" and "wrongly dielectric" columns are normalised by the size of
+the true class (its totals imply a constant dielectric share c = 0.60 for aluminium, 0.51 for steel;
+data/reference/table4_classification.csv), so the study reports the same class-size-normalised rates,
+``false_metal_rate`` (per true dielectric pixel) and ``false_dielectric_rate`` (per true metal pixel)
+of :func:`scatterlab.deconvolution.classification_errors` -- the columns
+``scatterlab.characterization.metrics.score_plate`` reports -- and the total as a fraction of all
+pixels, with our own metal share beside the text's implied one. Deviations: simulated plates, the
+interior of the image only, and (quick) 48 px and 40 EM iterations instead of the text's 250.
+Run time: quick 20 s measured on the shared 2-core machine at load ~13 (less when idle); full
+(128 px, 250 iterations, 3 screens): not timed in this revision (the lead's pipeline was changing).
 """
 
 import numpy as np
-from scatterlab.studies._common import plate_observations
+from scatterlab.studies._common import compare, plate_observations, set_verdict
 
 from scatterlab.characterization.pipeline import interior
 from scatterlab.characterization.reference_tables import TABLE4
@@ -20,7 +31,15 @@ STUDY = {
     "title": "Metal/dielectric classification at 50 deg through turbulence (Table 4)",
     "reproduces": "Table 4 (Sec. 5.3.3), Figs. 49-50",
 }
-COLS = ("false_metal", "false_dielectric", "total_error", "correlation", "rmse")
+COLS = (
+    "false_metal_rate",
+    "false_dielectric_rate",
+    "total_error",
+    "correlation",
+    "rmse",
+    "metal_share",
+)
+IMPLIED_METAL_SHARE = {"aluminium": 0.40, "steel": 0.49}
 
 
 def run(ctx):
@@ -32,10 +51,12 @@ def run(ctx):
         )
     sel = interior((size, size), max(2, size // 16))
     lines = [
-        "| plate | image | wrongly metal | wrongly dielectric | total [published] | corr. coef. [published] | "
-        "RMSE | total vs true labels |",
+        "| plate | image | wrongly metal (per dielectric px) [published] | wrongly dielectric (per metal "
+        "px) [published] | total [published] | corr. coef. [published] | metal share [implied] | "
+        "total vs true labels |",
         "|---|---|---|---|---|---|---|---|",
     ]
+    cmp, dominant = [], []
     pyplot = plt()
     fig, axes = pyplot.subplots(1, 2, figsize=(10, 3.8), sharey=True)
     for ax, (plate, d) in zip(axes, data.items()):
@@ -64,9 +85,18 @@ def run(ctx):
                 res[key] = mean
                 pub = TABLE4[plate][key]
                 lines.append(
-                    f"| {plate} | {key} | {mean['false_metal']:.4f} | {mean['false_dielectric']:.4f} | "
+                    f"| {plate} | {key} | {mean['false_metal_rate']:.4f} [{pub[0]:.4f}] | "
+                    f"{mean['false_dielectric_rate']:.4f} [{pub[1]:.4f}] | "
                     f"{mean['total_error']:.4f} +/- {mean['spread_total']:.4f} [{pub[2]:.4f}] | "
-                    f"{mean['correlation']:.4f} [{pub[3]:.4f}] | {mean['rmse']:.4f} | {mean['total_vs_labels']:.4f} |"
+                    f"{mean['correlation']:.4f} [{pub[3]:.4f}] | {mean['metal_share']:.3f} "
+                    f"[{IMPLIED_METAL_SHARE[plate]:.2f}] | {mean['total_vs_labels']:.4f} |"
+                )
+                u = max(mean["spread_total"] / np.sqrt(reps), _binomial_u(mean["total_error"], sel))
+                cmp.append(
+                    compare(f"{plate} {key} total error", pub[2], mean["total_error"], 0.0, u)
+                )
+                dominant.append(
+                    (mean["false_dielectric_rate"] > mean["false_metal_rate"]) == (pub[1] > pub[0])
                 )
         res["no_turbulence_vs_labels"] = float(
             np.mean(
@@ -112,12 +142,52 @@ def run(ctx):
         for p in data
     }
     ctx.metrics["corrected_not_worse"] = better
+    ctx.metrics["comparisons"] = cmp
+    inside = sum(c["inside"] for c in cmp)
+    ratio = [c["ours"] / c["published"] for c in cmp]
     ctx.say(
-        f"{size}^2 pixels, {its} EM iterations, {reps} screen(s) per D/r0. The corrected classification is at "
-        f"least as good as the degraded threshold in {sum(map(sum, better.values()))} of {2 * len(d_r0)} cases. "
-        "The reference found the improvement marginal at these D/r0 (total errors 0.04-0.06 either way); on "
-        "the simulated plates the errors are larger because the bright metal's diffraction and turbulence halo "
-        "lowers the DOLP of paint near the strokes (the no-turbulence image is the truth here, so the "
-        f"no-turbulence map itself errs by {ctx.metrics[next(iter(data))]['no_turbulence_vs_labels']:.3f} "
-        "against the true labels on the first plate)."
+        f"{size}^2 pixels, {its} EM iterations, {reps} screen(s) per D/r0. Total error against the "
+        f"text: {inside} of {len(cmp)} rows inside 2 x the combined uncertainty (ours: the spread "
+        "over screens, at least the pixel-binomial error, which underestimates it because errors "
+        f"cluster; the text gives none); ours is {min(ratio):.1f}-{max(ratio):.1f} x the published "
+        f"total. The dominant error type (wrongly dielectric vs wrongly metal, per class) agrees "
+        f"with the text in {sum(dominant)} of {len(dominant)} rows. The corrected classification "
+        f"is at least as good as the degraded threshold in {sum(map(sum, better.values()))} of "
+        f"{2 * len(d_r0)} cases (the text: marginal changes, totals 0.040-0.058 either way). "
+        + _cause(ctx.metrics, data, d_r0)
+    )
+    set_verdict(
+        ctx,
+        "reproduced"
+        if inside == len(cmp)
+        else "partly"
+        if inside or 2 * sum(dominant) >= len(dominant)
+        else "not reproduced",
+        f"total error {min(ratio):.1f}-{max(ratio):.1f} x published (0.040-0.058); {inside}/{len(cmp)} "
+        f"inside 2u; dominant error type as published in {sum(dominant)}/{len(dominant)}",
+    )
+
+
+def _binomial_u(p, sel):
+    """Pixel-binomial standard error of an error fraction ``p`` over the scored pixels ``sel``."""
+    return float(np.sqrt(max(p * (1 - p), 1e-12) / max(int(np.sum(sel)), 1)))
+
+
+def _cause(metrics, data, d_r0):
+    """What the numbers say about the excess error: truth map or paint/metal confusion."""
+    keys = [f"D_r0_{x:g}_{k}" for x in d_r0 for k in ("degraded", "corrected")]
+    parts = []
+    for plate in data:
+        fm = np.mean([metrics[plate][k]["false_metal_rate"] for k in keys])
+        fd = np.mean([metrics[plate][k]["false_dielectric_rate"] for k in keys])
+        parts.append(
+            f"{plate}: no-turbulence map vs true labels {metrics[plate]['no_turbulence_vs_labels']:.3f}, "
+            f"mean wrongly-metal rate {fm:.2f}, wrongly-dielectric rate {fd:.2f}"
+        )
+    return (
+        "Where the excess comes from: " + "; ".join(parts) + ". The truth map is not the cause "
+        "where its own error is small next to the totals; the excess is paint classified as metal "
+        "(and, on steel, metal as paint): through turbulence the bright metal's halo spreads over the "
+        "paint and mixes the two DOLPs. How far that reaches relative to the plate depends on the "
+        "image size (48 px in quick mode); the study does not separate that effect."
     )

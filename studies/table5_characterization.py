@@ -4,9 +4,18 @@ DOLP images (Ch. VII), simulated, against the text's measured Table 5.
 Runs the characterization pipeline (the README's main job) on the bundled scene -- painted aluminium and
 painted steel at 1550 nm, specular geometries 30-60 deg, D/r0 7.9 and 12.9 -- and compares the per-region
 means and standard deviations of the per-pixel least-squares n and kappa with Table 5.
+
+Like for like: the text's 250 deconvolution iterations (full mode; quick 30), roughness sigma = 0.3
+known to the inversion, the same value table5_synthetic uses (deviation: the text's samples have
+sigma < 1 deg, measured from the specular lobe width). The text's central result is compared as a
+number: the paint's per-pixel scatter (sd of n) shrinks 2.0-4.2x from degraded to corrected; so are
+the metals' mean kappa under turbulence. Run time: quick (48 px, 3 angles, 30 iterations) 134 s
+measured at load ~13 on the shared 2-core machine; full (128 px, 7 angles, 250 iterations): not timed
+in this revision.
 """
 
 import numpy as np
+from scatterlab.studies._common import compare, set_verdict
 
 from scatterlab.characterization import characterize, default_scene
 from scatterlab.characterization.reference_tables import TABLE5
@@ -27,7 +36,9 @@ def run(ctx):
         "n_kappa",
     ]  # posteriors: the main job's report; here the Table 5 statistics
     if ctx.quick:
-        cfg.image_size, cfg.geometry_deg, cfg.iterations = 48, [30, 40, 50, 60], 30
+        cfg.image_size, cfg.geometry_deg, cfg.iterations = 48, [30, 45, 60], 30
+    else:
+        cfg.iterations = 250  # the text's deconvolution iterations (Figs. 49 and 54)
     with ctx.step("characterize"):
         characterize(cfg, ctx.out / "characterization", overwrite=True, executor=ctx.executor)
     import json
@@ -133,15 +144,69 @@ def run(ctx):
     }
     ctx.metrics["paint_index_median_abs_error"] = paint
     ctx.metrics["paint_kappa_mean_error"] = kappa
+    _findings(ctx, summary, cfg)
+
+
+def _findings(ctx, summary, cfg):
+    """The text's central numbers against ours: paint scatter shrink factor, metal kappa."""
+    m = ctx.metrics
+    shrink, kap = [], []
+    for plate in summary["plates"]:
+        for x in cfg.d_over_r0:
+            deg, cor = f"D_r0_{x:g}_degraded", f"D_r0_{x:g}_corrected"
+            pub = TABLE5[plate]["paint"]
+            ours = m[plate]["paint"][deg]["n_std"] / max(m[plate]["paint"][cor]["n_std"], 1e-12)
+            shrink.append(
+                compare(
+                    f"{plate} D/r0 {x:g} paint sd(n) degraded/corrected",
+                    pub[deg][1] / pub[cor][1],
+                    ours,
+                )
+            )
+            pk = TABLE5[plate]["metal"][cor][2]
+            kap.append(
+                compare(
+                    f"{plate} D/r0 {x:g} corrected metal E[kappa]",
+                    pk,
+                    m[plate][plate][cor]["kappa_mean"],
+                )
+            )
+    m["paint_scatter_shrink"] = shrink
+    m["metal_kappa_corrected"] = kap
+    ratio = [c["ours"] for c in shrink]
+    pub_ratio = [c["published"] for c in shrink]
+    rel = [c["diff"] / c["published"] for c in kap]
+    kept = sum(1 for c in shrink if c["ours"] >= 2.0)
     ctx.say(
-        "Paint, averaged over both plates -- median per-pixel |eta - eta_true|: "
-        + ", ".join(f"{k} {v:.2f}" for k, v in paint.items())
-        + "; |E[kappa] - 0.34|: "
-        + ", ".join(f"{k} {v:.2f}" for k, v in kappa.items())
-        + ". Correction brings the paint's kappa and "
-        "complex index back toward the no-turbulence values at both D/r0, as the text's corrected rows do "
-        "(its degraded paint n 2.24-2.38, corrected 1.28-1.39). The bare metals stay poorly determined "
-        "(n pinned at the bounds in many pixels): Rs ~ Rp at 30-60 deg leaves their DOLP small, the reason the "
-        "text gives for its metal errors. The pipeline's own report (characterization/report.md) gives the "
-        "DOLP, S0 and classification errors behind these numbers."
+        "The text's central result, the paint's per-pixel scatter of n shrinking after correction: "
+        f"published {min(pub_ratio):.1f}-{max(pub_ratio):.1f}x, ours "
+        + ", ".join(f"{r:.2f}x" for r in ratio)
+        + f" ({kept} of {len(ratio)} cases reach the text's lower end, 2x). "
+        + ("Reproduced. " if kept == len(ratio) else "NOT reproduced in the other cases. ")
+        + "Corrected metal kappa against Table 5: "
+        + "; ".join(
+            f"{c['name'].split(' corrected')[0]} ours {c['ours']:.2f}, published "
+            f"{c['published']:.2f} ({r:+.0%})"
+            for c, r in zip(kap, rel)
+        )  # fmt: skip
+        + (
+            f". Quick mode ({cfg.image_size} px, {len(cfg.geometry_deg)} angles, {cfg.iterations} "
+            "iterations) is not like for like; the full mode is"
+            if ctx.quick
+            else ""
+        )
+        + ". The text gives no uncertainty of its means beyond the per-pixel sd, and its plates "
+        "are measured (oxide, calibration), ours simulated with the literature indices "
+        f"({', '.join(f'{p.metal} {p.metal_n} - j{p.metal_kappa}' for p in cfg.plates)}), so the "
+        "metal comparison is against a different truth; the table lists our errors against ours. "
+        "Bare metals stay poorly determined (Rs ~ Rp at 30-60 deg leaves their DOLP small, the "
+        "text's reason). The pipeline's report (characterization/report.md) has the DOLP, S0 and "
+        "classification errors behind these numbers."
+    )
+    set_verdict(
+        ctx,
+        "reproduced" if kept == len(ratio) else "partly" if kept else "not reproduced",
+        f"paint sd(n) shrink {min(ratio):.1f}-{max(ratio):.1f}x (published "
+        f"{min(pub_ratio):.1f}-{max(pub_ratio):.1f}x); corrected metal kappa "
+        f"{min(rel):+.0%}..{max(rel):+.0%} vs published",
     )

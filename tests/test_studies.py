@@ -12,7 +12,7 @@ ALL = studies.discover()
 
 
 @pytest.mark.parametrize("sid", list(ALL))
-def test_study_runs_in_quick_mode(sid, tmp_path):
+def test_study_runs_in_quick_mode(sid, tmp_path, record_testsuite_property):
     report = studies.run_study(sid, tmp_path / sid, quick=True, seed=7)
     assert report.exists()
     text = report.read_text()
@@ -20,8 +20,14 @@ def test_study_runs_in_quick_mode(sid, tmp_path):
     m = json.loads((tmp_path / sid / "metrics.json").read_text())
     assert m["seed"] == 7 and m["mode"] == "quick"
     assert m["run_time_s"]["total"] > 0
+    # the quick-mode time is recorded (junit XML with --junitxml), never asserted: it depends on load
+    record_testsuite_property(f"quick_run_time_s[{sid}]", round(m["run_time_s"]["total"], 2))
     assert "numpy" in m["versions"]
     assert m["metrics"]
+    verdict = m["metrics"].get("verdict")
+    if verdict is not None:  # the index page's columns (studies._common.set_verdict)
+        assert verdict in ("reproduced", "partly", "not reproduced", "own study"), verdict
+        assert m["metrics"]["headline"]
     for name in m.get("figures", []):
         assert (tmp_path / sid / f"{name}.png").exists()
     pngs = list((tmp_path / sid).glob("*.png"))
@@ -67,3 +73,31 @@ def test_old_runner_location_still_works_with_a_deprecation_warning():
     with warnings.catch_warnings(), pytest.raises(AttributeError):
         warnings.simplefilter("ignore")
         old.no_such_name  # noqa: B018
+
+
+def test_index_lists_verdict_and_headline(tmp_path, monkeypatch):
+    folder = tmp_path / "studies"
+    folder.mkdir()
+    body = (
+        "STUDY = {{'id': '{sid}', 'title': 't', 'reproduces': '{rep}'}}\n"
+        "def run(ctx):\n"
+        "    ctx.metrics['x'] = 1.0\n"
+        "    ctx.say('finding')\n"
+        "{extra}"
+    )
+    (folder / "a_fig.py").write_text(
+        body.format(
+            sid="a_fig",
+            rep="Fig. 1",
+            extra="    ctx.metrics['verdict'] = 'partly'\n    ctx.metrics['headline'] = 'x 1.0 vs 2.0'\n",
+        )
+    )
+    (folder / "b_own.py").write_text(body.format(sid="b_own", rep="own study", extra=""))
+    (folder / "c_fig.py").write_text(body.format(sid="c_fig", rep="Fig. 2", extra=""))
+    monkeypatch.setenv("SCATTERLAB_STUDIES", str(folder))
+    index, status = studies.run_all(tmp_path / "out", quick=True)
+    assert set(status.values()) == {"ok"}
+    rows = {line.split("|")[2].strip(): line for line in index.read_text().splitlines()[6:]}
+    assert "| partly | x 1.0 vs 2.0 |" in rows["[a_fig](a_fig/report.md)"]
+    assert "| own study |" in rows["[b_own](b_own/report.md)"]
+    assert "| not stated |" in rows["[c_fig](c_fig/report.md)"]
