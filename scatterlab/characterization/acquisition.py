@@ -131,6 +131,24 @@ def _field_psf(pupil, screen, shape):
     return resample_psf(psf(pupil, screen, pad=2), shape)
 
 
+def _camera_psf(pupil, d_over_r0, psf, ideal: Ideal, shape, rng):
+    """The PSF that blurs the camera field ``shape``: a given one, none (``ideal.optics``), the
+    diffraction-limited pupil's, or the pupil's through one new Kolmogorov screen of ``d_over_r0``."""
+    from scatterlab.deconvolution import resample_psf
+    from scatterlab.imaging import phase_screen
+
+    if psf is not None:
+        return resample_psf(np.clip(np.asarray(psf, float), 0, None), shape)
+    n = pupil.shape[0]
+    # the screen is drawn even when the optics are ideal: the noise that follows keeps its draws
+    screen = None if d_over_r0 is None else phase_screen(n, 1.0, n / d_over_r0, rng)
+    if ideal.optics:
+        h = np.zeros(shape)
+        h[shape[0] // 2, shape[1] // 2] = 1.0
+        return h
+    return _field_psf(pupil, screen, shape)
+
+
 def acquire(
     plate, labels, theta, case, d_over_r0, cfg, rng, ideal: Ideal = Ideal(), *, psf=None
 ) -> Acquisition:
@@ -162,13 +180,7 @@ def acquire(
     Acquisition
     """
     from scatterlab.characterization.registration import foreshorten
-    from scatterlab.imaging import (
-        channel_images,
-        circular_pupil,
-        detect,
-        phase_screen,
-        render_stokes,
-    )
+    from scatterlab.imaging import channel_images, circular_pupil, detect, render_stokes
     from scatterlab.polarization import signed_dolp
 
     labels = np.asarray(labels)
@@ -182,18 +194,7 @@ def acquire(
     S_cam = render_stokes(plate_scene(plate, seen, theta))
     n = H // 2
     pupil = circular_pupil(n, n / 2)
-    screen = (
-        None if d_over_r0 is None or psf is not None else phase_screen(n, 1.0, n / d_over_r0, rng)
-    )
-    if psf is not None:
-        from scatterlab.deconvolution import resample_psf
-
-        h_wide = resample_psf(np.clip(np.asarray(psf, float), 0, None), seen.shape)
-    elif ideal.optics:
-        h_wide = np.zeros(seen.shape)
-        h_wide[seen.shape[0] // 2, seen.shape[1] // 2] = 1.0
-    else:
-        h_wide = _field_psf(pupil, screen, seen.shape)
+    h_wide = _camera_psf(pupil, d_over_r0, psf, ideal, seen.shape, rng)
     channels = channel_images(S_cam, angles, h_wide)[:, my : my + H, mx : mx + W]
     channels = np.clip(channels, 0.0, None)  # FFT round-off below zero
     if ideal.noise:
