@@ -42,7 +42,10 @@ __all__ = [
 ]
 
 PARAMS = ("n", "kappa")
-PIXEL_DOLP_MARGIN = 0.05  # per-pixel DOLP beyond [-0.05, 1.05] is treated as undefined
+PIXEL_DOLP_MARGIN = 0.05
+# a self-calibration correction this large (DOLP) is flagged beside the posterior: on the coverage scene the
+# bootstrap with an estimated plate recovered a third to a half of such losses (with the true plate, all)
+LARGE_CORRECTION = 0.1  # per-pixel DOLP beyond [-0.05, 1.05] is treated as undefined
 
 
 @dataclass
@@ -262,6 +265,13 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
         )
     if diag.get("multimodal"):
         notes.append("the posterior has several modes: the median lies between them")
+    if data.bias is not None and np.nanmax(np.abs(data.bias)) > LARGE_CORRECTION:
+        notes.append(
+            f"the self-calibration moved this region's DOLP by up to "
+            f"{np.nanmax(np.abs(data.bias)):.2f}: the restoration lost much of its polarization, and a "
+            "re-simulation of the estimated plate recovers only part of such a loss "
+            "(studies/characterization_coverage.py), so the interval may be too narrow"
+        )
     return RegionEstimate(name, params, converged, notes, post.chain, data)
 
 
