@@ -42,10 +42,10 @@ __all__ = [
 ]
 
 PARAMS = ("n", "kappa")
-PIXEL_DOLP_MARGIN = 0.05
+PIXEL_DOLP_MARGIN = 0.05  # per-pixel DOLP beyond [-0.05, 1.05] is treated as undefined
 # a self-calibration correction this large (DOLP) is flagged beside the posterior: on the coverage scene the
 # bootstrap with an estimated plate recovered a third to a half of such losses (with the true plate, all)
-LARGE_CORRECTION = 0.1  # per-pixel DOLP beyond [-0.05, 1.05] is treated as undefined
+LARGE_CORRECTION = 0.1
 
 
 @dataclass
