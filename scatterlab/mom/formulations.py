@@ -111,6 +111,7 @@ def solve(
     block: int = 256,
     min_points_per_wavelength: float = 5.0,
     band: float = 2.0,
+    fast=None,
 ) -> Solution:
     """Scattering by a rough profile or a closed body, s- or p-polarized, PEC or a real material.
 
@@ -126,59 +127,68 @@ def solve(
     closed : bool
     method : "exact" (two-medium, both media sampled) or "impedance" (Leontovich, for |eta| >> 1;
         module docstring for its validity).
-    solver : "lu" or "fb" (block forward-backward with the LU fallback).
+    solver : "lu", "fb" (block forward-backward with the LU fallback) or "fast" (s-pol PEC open
+        profiles only: :mod:`scatterlab.mom.fast`).
     tol, max_iter, block : forward-backward controls.
     min_points_per_wavelength : below this (longest pulse) in either medium raises ValueError; a
         median pulse longer than 1/8 of the wavelength in a medium warns. Inside, the wavelength is
         lambda / |eta|.
     band : half-width of the near-field quadrature band in wavelengths of each medium.
+    fast : FastOptions, optional -- knobs of ``solver="fast"``.
 
     Returns
     -------
     Solution -- ``current`` U, ``surface_field`` psi, far field, scattering and transmission
     coefficients.
     """
-    if polarization not in ("s", "p"):
-        raise ValueError(
-            f"polarization must be 's' (E along z) or 'p' (H along z), got {polarization!r}"
-        )
-    if method not in ("exact", "impedance"):
-        raise ValueError(f"method must be 'exact' or 'impedance', got {method!r}")
+    _check_choices(polarization, method, solver, eta)
+    controls = {"solver": solver, "tol": tol, "max_iter": max_iter, "block": block}
     if eta is None and polarization == "s":
-        sol = solve_tm(
+        mppw = min_points_per_wavelength
+        return solve_tm(
             x,
             y,
             wavelength,
             incidence,
             closed,
-            solver=solver,
-            tol=tol,
-            max_iter=max_iter,
-            block=block,
-            min_points_per_wavelength=min_points_per_wavelength,
+            min_points_per_wavelength=mppw,
+            fast=fast,
+            **controls,
         )
-        return sol
     eta = None if eta is None else complex(as_index(eta, "eta"))
     wavelength = float(as_positive(wavelength, "wavelength"))
     k = 2 * np.pi / wavelength
     c = arclength_contour(contour(x, y, closed))
-    check_sampling(c, wavelength, min_points_per_wavelength, "outside")
-    if eta is not None and method == "exact":
-        check_sampling(
-            c,
-            wavelength / abs(eta),
-            min_points_per_wavelength,
-            f"inside (lambda / |eta| = "
-            f"{wavelength / abs(eta):.3g} m; or method='impedance' for a good conductor)",
-        )
-    if eta is not None and method == "impedance" and abs(eta) < 3:
-        warnings.warn(
-            f"the impedance condition needs |eta| >> 1, got |eta| = {abs(eta):.2f}: expect "
-            "errors of several percent (use method='exact')",
-            stacklevel=2,
-        )
+    _check_media(c, wavelength, eta, method, min_points_per_wavelength)
     incs = list(incidence) if isinstance(incidence, (list, tuple)) else [incidence]
     check_incidences(incs, c, k)
+    U, psi, res, timings, used = _fill_and_solve(
+        c, k, incs, (polarization, eta, method, band), tuple(controls.values())
+    )
+    single = not isinstance(incidence, (list, tuple))
+    return Solution(
+        contour=c,
+        k=k,
+        current=U[:, 0] if single else U,
+        incidences=incs,
+        residual=res,
+        timings=timings,
+        solver=used,
+        surface_field=psi[:, 0] if single else psi,
+        polarization=polarization,
+        eta=eta,
+        method=method if eta is not None else "exact",
+        quadrature="smooth",
+    )
+
+
+def _fill_and_solve(c, k, incs, physics, controls):
+    """Matrix fill and linear solve: returns U, psi (N, K), residuals (K,), timings, solver used.
+
+    ``physics`` = (polarization, eta, method, band); ``controls`` = (solver, tol, max_iter, block).
+    """
+    polarization, eta, method, band = physics
+    solver, tol, max_iter, block = controls
     t0 = time.perf_counter()
     A, split = _system(c, k, polarization, eta, method, band)
     t_fill = time.perf_counter() - t0
@@ -190,18 +200,39 @@ def solve(
     t_solve = time.perf_counter() - t0
     res = np.linalg.norm(A @ X - V, axis=0) / np.linalg.norm(V, axis=0)
     U, psi = split(X)
-    single = not isinstance(incidence, (list, tuple))
-    return Solution(
-        contour=c,
-        k=k,
-        current=U[:, 0] if single else U,
-        incidences=incs,
-        residual=res,
-        timings={"fill": t_fill, "solve": t_solve},
-        solver=used,
-        surface_field=psi[:, 0] if single else psi,
-        polarization=polarization,
-        eta=eta,
-        method=method if eta is not None else "exact",
-        quadrature="smooth",
-    )
+    return U, psi, res, {"fill": t_fill, "solve": t_solve}, used
+
+
+def _check_choices(polarization, method, solver, eta):
+    """ValueError for an unknown polarization, method or solver (the fast path: s-pol PEC)."""
+    if polarization not in ("s", "p"):
+        raise ValueError(
+            f"polarization must be 's' (E along z) or 'p' (H along z), got {polarization!r}"
+        )
+    if method not in ("exact", "impedance"):
+        raise ValueError(f"method must be 'exact' or 'impedance', got {method!r}")
+    if solver == "fast" and not (eta is None and polarization == "s"):
+        raise ValueError(
+            "solver='fast' handles the s-pol perfect conductor (eta=None, polarization='s') "
+            "only; use solver='lu' or 'fb'"
+        )
+
+
+def _check_media(c, wavelength, eta, method, min_ppw):
+    """Sampling outside and (exact formulation) inside; warn when the impedance condition is used
+    on a poor conductor."""
+    check_sampling(c, wavelength, min_ppw, "outside")
+    if eta is not None and method == "exact":
+        check_sampling(
+            c,
+            wavelength / abs(eta),
+            min_ppw,
+            f"inside (lambda / |eta| = "
+            f"{wavelength / abs(eta):.3g} m; or method='impedance' for a good conductor)",
+        )
+    if eta is not None and method == "impedance" and abs(eta) < 3:
+        warnings.warn(
+            f"the impedance condition needs |eta| >> 1, got |eta| = {abs(eta):.2f}: expect "
+            "errors of several percent (use method='exact')",
+            stacklevel=3,
+        )
