@@ -14,8 +14,7 @@ Quick mode: fewer realizations and radii (about 30 s); full mode about 3 minutes
 
 import numpy as np
 
-from scatterlab.mom import PlaneWave, TaperedWave, physical_optics, rough_surface, solve
-from scatterlab.mom.asymptotics import periodogram, spm1_coefficient
+from scatterlab.mom.asymptotics import compare_physical_optics, compare_spm1
 from scatterlab.plotting import headless_pyplot as plt
 
 STUDY = {
@@ -24,46 +23,7 @@ STUDY = {
     "reproduces": "own validation (issue 16, item 3: small-roughness and smooth limits)",
 }
 
-K = 2 * np.pi
 GLASS = 1.5
-
-
-def spm_case(polarization, eta, count, length, rng):
-    """(theta_s, MoM incoherent, SPM1 with periodograms, SPM1 ensemble) for one case."""
-    sigma_h, ell, ti = 0.1 / K, 1.0, np.radians(30)
-    ppw = 10 if eta is None else 10 * GLASS
-    th = np.radians(np.linspace(-89, 89, 357))
-    F, A = [], []
-    for _ in range(count):
-        x, y = rough_surface(length, 1 / ppw, sigma_h, ell, rng)
-        inc = TaperedWave(ti, length / 4, x0=0.5 * (x[0] + x[-1]))
-        F.append(solve(x, y, 1.0, inc, polarization=polarization, eta=eta).far_field(th))
-        A.append(periodogram(x, y, inc, K, th))
-    F, A = np.array(F), np.array(A)
-    incoh = (np.mean(np.abs(F) ** 2, 0) - np.abs(np.mean(F, 0)) ** 2) / (
-        8 * np.pi * K * inc.incident_power(K)
-    )
-    W = np.mean(np.abs(A) ** 2, 0) - np.abs(np.mean(A, 0)) ** 2
-
-    def spectrum(q):
-        return np.interp(q, K * (np.sin(th) - np.sin(ti)), W)
-
-    ref = spm1_coefficient(ti, th, K, spectrum, polarization, eta)
-    ens = spm1_coefficient(ti, th, K, (sigma_h, ell), polarization, eta) * (1 - 1 / count)
-    return th, incoh, ref, ens
-
-
-def po_case(polarization, ka):
-    """(relative L2 MoM vs PO in 120-180 deg, back-scatter / (pi a))."""
-    phi = np.radians(np.arange(120, 181))
-    a = ka / K
-    n = int(np.ceil(2 * np.pi * a * 10))
-    t = 2 * np.pi * (np.arange(n) + 0.5) / n
-    inc = PlaneWave(np.pi / 2)
-    sol = solve(a * np.cos(t), a * np.sin(t), 1.0, inc, closed=True, polarization=polarization)
-    ew = sol.echo_width(np.pi / 2 - phi)
-    ew_po = physical_optics(sol, inc, polarization).echo_width(np.pi / 2 - phi)
-    return float(np.linalg.norm(ew - ew_po) / np.linalg.norm(ew_po)), float(ew[-1] / (np.pi * a))
 
 
 def run(ctx):
@@ -73,7 +33,8 @@ def run(ctx):
     with ctx.step("spm1"):
         for j, (pol, eta) in enumerate((("s", None), ("p", None), ("s", GLASS), ("p", GLASS))):
             count, length = (8, 20.0) if ctx.quick else ((32, 30.0) if eta is None else (16, 20.0))
-            th, incoh, ref, ens = spm_case(pol, eta, count, length, ctx.rng)
+            out = compare_spm1(pol, eta, count, length, ctx.rng)
+            th, incoh, ref, ens = (out[k] for k in ("theta_s", "mom", "spm1", "spm1_ensemble"))
             name = f"{pol}_{'pec' if eta is None else 'glass'}"
             spm[name] = {
                 "realizations": count,
@@ -95,7 +56,7 @@ def run(ctx):
     kas = (10, 30) if ctx.quick else (10, 20, 40, 60, 100)
     with ctx.step("physical_optics"):
         for pol in ("s", "p"):
-            rows = [po_case(pol, ka) for ka in kas]
+            rows = [compare_physical_optics(pol, ka) for ka in kas]
             po[pol] = [
                 {"ka": ka, "l2_vs_po": r[0], "back_over_pi_a": r[1]} for ka, r in zip(kas, rows)
             ]

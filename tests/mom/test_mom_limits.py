@@ -4,13 +4,7 @@ physical optics (Kirchhoff) for large smooth bodies; both polarizations, PEC and
 import numpy as np
 import pytest
 
-from scatterlab.mom import PlaneWave, TaperedWave, rough_surface, solve
-from scatterlab.mom.asymptotics import (
-    periodogram,
-    physical_optics,
-    spm1_alpha,
-    spm1_coefficient,
-)
+from scatterlab.mom.asymptotics import compare_physical_optics, compare_spm1, spm1_alpha
 
 K = 2 * np.pi
 GLASS = 1.5
@@ -26,34 +20,6 @@ def test_spm1_factors_have_their_perfect_conductor_limits():
     assert abs(spm1_alpha(tb, tb, "p", GLASS)) < 1e-12
 
 
-def mom_and_spm1(polarization, eta, count, length, rng):
-    """Incoherent MoM coefficient over ``count`` realizations and SPM1 with each realization's
-    periodogram (the control variate), k sigma_h = 0.1, l = 1 wavelength, theta_i = 30 deg."""
-    sigma_h, ell, ti = 0.1 / K, 1.0, np.radians(30)
-    ppw = 10 if eta is None else 10 * GLASS
-    th = np.radians(np.linspace(-89, 89, 357))
-    F, Wr = [], []
-    for _ in range(count):
-        x, y = rough_surface(length, 1 / ppw, sigma_h, ell, rng)
-        inc = TaperedWave(ti, length / 4, x0=0.5 * (x[0] + x[-1]))
-        sol = solve(x, y, 1.0, inc, polarization=polarization, eta=eta)
-        F.append(sol.far_field(th))
-        Wr.append(periodogram(x, y, inc, K, th))
-    F = np.array(F)
-    incoh = (np.mean(np.abs(F) ** 2, 0) - np.abs(np.mean(F, 0)) ** 2) / (
-        8 * np.pi * K * inc.incident_power(K)
-    )
-    Wr = np.array(Wr)  # the same incoherent estimator as the MoM's
-    W = np.mean(np.abs(Wr) ** 2, 0) - np.abs(np.mean(Wr, 0)) ** 2
-
-    def spectrum(q):
-        return np.interp(q, K * (np.sin(th) - np.sin(ti)), W)
-
-    ref = spm1_coefficient(ti, th, K, spectrum, polarization, eta)
-    ens = spm1_coefficient(ti, th, K, (sigma_h, ell), polarization, eta) * (1 - 1 / count)
-    return th, incoh, ref, ens
-
-
 @pytest.mark.parametrize("polarization,eta", [("s", None), ("p", None), ("s", GLASS), ("p", GLASS)])
 def test_small_roughness_follows_first_order_perturbation_theory(polarization, eta):
     """k sigma_h = 0.1, theta_i = 30 deg. With SPM1 evaluated on the realizations' own
@@ -66,7 +32,8 @@ def test_small_roughness_follows_first_order_perturbation_theory(polarization, e
     low: the periodogram scatter the control variate removes."""
     rng = np.random.default_rng(7)
     count, length = (16, 30.0) if eta is None else (8, 20.0)
-    th, incoh, ref, _ = mom_and_spm1(polarization, eta, count, length, rng)
+    out = compare_spm1(polarization, eta, count, length, rng)
+    th, incoh, ref = out["theta_s"], out["mom"], out["spm1"]
     assert abs(np.trapezoid(incoh, th) / np.trapezoid(ref, th) - 1) < 0.08
     for b in np.array_split(np.arange(th.size), 12):
         if ref[b].mean() > 0.05 * ref.max():
@@ -81,18 +48,8 @@ def test_large_smooth_body_approaches_physical_optics(polarization):
     0.053; Kirchhoff misses the shadow-boundary and creeping currents, larger for the Neumann
     problem, so p converges as about (ka)^-1/2), and the backscatter tends to the geometric-optics
     pi a (measured at ka = 60: 1.0002 s, 1.0013 p)."""
-    phi = np.radians(np.arange(120, 181))
-    errs, back = [], []
-    for ka in (10, 60):
-        a = ka / K
-        n = int(np.ceil(2 * np.pi * a * 10))
-        t = 2 * np.pi * (np.arange(n) + 0.5) / n
-        inc = PlaneWave(np.pi / 2)
-        sol = solve(a * np.cos(t), a * np.sin(t), 1.0, inc, closed=True, polarization=polarization)
-        po = physical_optics(sol, inc, polarization)
-        ew, ew_po = sol.echo_width(np.pi / 2 - phi), po.echo_width(np.pi / 2 - phi)
-        errs.append(np.linalg.norm(ew - ew_po) / np.linalg.norm(ew_po))
-        back.append(ew[-1] / (np.pi * a))
+    (e10, b10), (e60, b60) = (compare_physical_optics(polarization, ka) for ka in (10, 60))
+    errs, back = [e10, e60], [b10, b60]
     assert errs[1] < errs[0] / 2
     assert errs[1] < (0.01 if polarization == "s" else 0.08)
     assert abs(back[1] - 1) < 0.01
