@@ -9,7 +9,9 @@
     integrated by FFT, :func:`scatterlab.mom.fast.scattered_power`).
 
 Surfaces: Gaussian heights sigma_h = 0.3 wavelength, rms slope 0.3, 10 points per wavelength,
-Thorsos taper g = L/4. Full mode takes several minutes (the 10^5 solve most of it).
+Thorsos taper g = L/4. Measured on the shared 2-core machine: full mode 448 s (the 10^5 solve
+285 s, 64 GMRES iterations, Taylor order 17, R = 0.99988); quick mode 65 s wall under load (19 s
+of CPU).
 """
 
 import time
