@@ -8,9 +8,14 @@
   incidences or forward-backward;
   the solution gives ``current``, ``far_field``, ``echo_width`` and ``scattering_coefficient``;
 * :func:`incoherent_scattering` -- Monte-Carlo average over partitions with standard errors;
-* :mod:`scatterlab.mom.exact` -- the exact series for a circular cylinder (PEC or penetrable, s and p).
+* :mod:`scatterlab.mom.exact` -- the exact series for a circular cylinder (PEC or penetrable, s and p);
+* :func:`spm1_coefficient`, :func:`physical_optics` -- the small-roughness and Kirchhoff limits
+  (:mod:`scatterlab.mom.asymptotics`);
+* ``solve_tm(..., solver="fast")`` -- banded matrix + FFT far interactions for long PEC profiles
+  (:mod:`scatterlab.mom.fast`, 10^5 unknowns in minutes).
 """
 
+from scatterlab.mom.asymptotics import physical_optics, spm1_coefficient
 from scatterlab.mom.efie import (
     Solution,
     contour,
@@ -46,9 +51,11 @@ __all__ = [
     "forward_backward",
     "impedance_matrix",
     "incoherent_scattering",
+    "physical_optics",
     "physical_optics_current",
     "rms_slope",
     "rough_surface",
     "solve",
     "solve_tm",
+    "spm1_coefficient",
 ]

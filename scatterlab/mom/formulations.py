@@ -18,8 +18,10 @@ system.
 
 * ``eta=None``, s-pol: :func:`~scatterlab.mom.efie.solve_tm` (EFIE, :math:`\psi = 0`), unchanged.
 * ``eta=None``, p-pol: U = 0, the magnetic-field equation :math:`(\tfrac12 - D_1)\psi = \psi_{inc}`
-  (second kind; for a closed body it fails near the interior Dirichlet resonances, zeros of
-  :math:`J_n(ka)` for a circle -- a known property of the MFIE; open profiles have none).
+  (second kind). For a closed body it fails near the interior Dirichlet resonances (zeros of
+  :math:`J_n(ka)` for a circle -- a known property of the MFIE; open profiles have none), so
+  CHIEF rows (:func:`chief_rows`: the field vanishes at points inside) are added and the
+  overdetermined system is solved by least squares.
 * ``method="impedance"`` (Leontovich): inside a good conductor the field is a wave travelling
   straight in,
   :math:`\partial_n\psi_2 = jk\eta\,\psi`, so :math:`U = jk\eta\psi` (s) or :math:`U = jk\psi/\eta`
@@ -42,7 +44,7 @@ from scipy import linalg
 
 from scatterlab._checks import as_index, as_positive
 from scatterlab.mom.efie import Solution, check_incidences, check_sampling, contour, solve_tm
-from scatterlab.mom.kernels import arclength_contour, layer_matrices
+from scatterlab.mom.kernels import arclength_contour, hankel2, layer_matrices
 
 __all__ = ["solve"]
 
@@ -111,6 +113,7 @@ def solve(
     block: int = 256,
     min_points_per_wavelength: float = 5.0,
     band: float = 2.0,
+    fast=None,
 ) -> Solution:
     """Scattering by a rough profile or a closed body, s- or p-polarized, PEC or a real material.
 
@@ -126,70 +129,44 @@ def solve(
     closed : bool
     method : "exact" (two-medium, both media sampled) or "impedance" (Leontovich, for |eta| >> 1;
         module docstring for its validity).
-    solver : "lu" or "fb" (block forward-backward with the LU fallback).
+    solver : "lu", "fb" (block forward-backward with the LU fallback) or "fast" (s-pol PEC open
+        profiles only: :mod:`scatterlab.mom.fast`).
     tol, max_iter, block : forward-backward controls.
     min_points_per_wavelength : below this (longest pulse) in either medium raises ValueError; a
         median pulse longer than 1/8 of the wavelength in a medium warns. Inside, the wavelength is
         lambda / |eta|.
     band : half-width of the near-field quadrature band in wavelengths of each medium.
+    fast : FastOptions, optional -- knobs of ``solver="fast"``.
 
     Returns
     -------
     Solution -- ``current`` U, ``surface_field`` psi, far field, scattering and transmission
     coefficients.
     """
-    if polarization not in ("s", "p"):
-        raise ValueError(
-            f"polarization must be 's' (E along z) or 'p' (H along z), got {polarization!r}"
-        )
-    if method not in ("exact", "impedance"):
-        raise ValueError(f"method must be 'exact' or 'impedance', got {method!r}")
+    _check_choices(polarization, method, solver, eta)
+    controls = {"solver": solver, "tol": tol, "max_iter": max_iter, "block": block}
     if eta is None and polarization == "s":
-        sol = solve_tm(
+        mppw = min_points_per_wavelength
+        return solve_tm(
             x,
             y,
             wavelength,
             incidence,
             closed,
-            solver=solver,
-            tol=tol,
-            max_iter=max_iter,
-            block=block,
-            min_points_per_wavelength=min_points_per_wavelength,
+            min_points_per_wavelength=mppw,
+            fast=fast,
+            **controls,
         )
-        return sol
     eta = None if eta is None else complex(as_index(eta, "eta"))
     wavelength = float(as_positive(wavelength, "wavelength"))
     k = 2 * np.pi / wavelength
     c = arclength_contour(contour(x, y, closed))
-    check_sampling(c, wavelength, min_points_per_wavelength, "outside")
-    if eta is not None and method == "exact":
-        check_sampling(
-            c,
-            wavelength / abs(eta),
-            min_points_per_wavelength,
-            f"inside (lambda / |eta| = "
-            f"{wavelength / abs(eta):.3g} m; or method='impedance' for a good conductor)",
-        )
-    if eta is not None and method == "impedance" and abs(eta) < 3:
-        warnings.warn(
-            f"the impedance condition needs |eta| >> 1, got |eta| = {abs(eta):.2f}: expect "
-            "errors of several percent (use method='exact')",
-            stacklevel=2,
-        )
+    _check_media(c, wavelength, eta, method, min_points_per_wavelength)
     incs = list(incidence) if isinstance(incidence, (list, tuple)) else [incidence]
     check_incidences(incs, c, k)
-    t0 = time.perf_counter()
-    A, split = _system(c, k, polarization, eta, method, band)
-    t_fill = time.perf_counter() - t0
-    V = np.stack([inc.field(c.x, c.y, k) for inc in incs], axis=1)
-    if A.shape[0] == 2 * c.size:
-        V = np.concatenate([V, np.zeros_like(V)])
-    t0 = time.perf_counter()
-    X, used = _linear_solve(A, V, solver, tol, max_iter, block, interleave=A.shape[0] == 2 * c.size)
-    t_solve = time.perf_counter() - t0
-    res = np.linalg.norm(A @ X - V, axis=0) / np.linalg.norm(V, axis=0)
-    U, psi = split(X)
+    U, psi, res, timings, used = _fill_and_solve(
+        c, k, incs, (polarization, eta, method, band), tuple(controls.values())
+    )
     single = not isinstance(incidence, (list, tuple))
     return Solution(
         contour=c,
@@ -197,7 +174,7 @@ def solve(
         current=U[:, 0] if single else U,
         incidences=incs,
         residual=res,
-        timings={"fill": t_fill, "solve": t_solve},
+        timings=timings,
         solver=used,
         surface_field=psi[:, 0] if single else psi,
         polarization=polarization,
@@ -205,3 +182,123 @@ def solve(
         method=method if eta is not None else "exact",
         quadrature="smooth",
     )
+
+
+def _fill_and_solve(c, k, incs, physics, controls):
+    """Matrix fill and linear solve: returns U, psi (N, K), residuals (K,), timings, solver used.
+
+    ``physics`` = (polarization, eta, method, band); ``controls`` = (solver, tol, max_iter, block).
+    """
+    polarization, eta, method, band = physics
+    solver, tol, max_iter, block = controls
+    t0 = time.perf_counter()
+    A, split = _system(c, k, polarization, eta, method, band)
+    t_fill = time.perf_counter() - t0
+    V = np.stack([inc.field(c.x, c.y, k) for inc in incs], axis=1)
+    if A.shape[0] == 2 * c.size:
+        V = np.concatenate([V, np.zeros_like(V)])
+    t0 = time.perf_counter()
+    if eta is None and c.closed:  # p-pol PEC body: the MFIE with CHIEF rows, least squares
+        rows, rhs = chief_rows(c, k, incs)
+        A, V = np.vstack([A, rows]), np.vstack([V, rhs])
+        X, used = linalg.lstsq(A, V, lapack_driver="gelsy", check_finite=False)[0], "lstsq (CHIEF)"
+    else:
+        X, used = _linear_solve(
+            A, V, solver, tol, max_iter, block, interleave=A.shape[0] == 2 * c.size
+        )
+    t_solve = time.perf_counter() - t0
+    res = np.linalg.norm(A @ X - V, axis=0) / np.linalg.norm(V, axis=0)
+    U, psi = split(X)
+    return U, psi, res, {"fill": t_fill, "solve": t_solve}, used
+
+
+def chief_points(c, count: int):
+    """Interior points of a closed contour for CHIEF (Schenck 1968): the contour shrunk towards its
+    centroid by irregular factors in (0.1, 0.8) (golden-ratio sequences, so no symmetry line of a
+    circle is favoured), kept where they are inside (even-odd ray casting).
+
+    Parameters
+    ----------
+    c : Contour -- closed.
+    count : int -- number of candidate points.
+
+    Returns
+    -------
+    px, py : ndarrays (P,) [m], P <= count.
+    """
+    golden = (np.sqrt(5) - 1) / 2
+    j = np.arange(1, count + 1)
+    idx = np.floor((j * golden) % 1 * c.size).astype(int)
+    fac = 0.1 + 0.7 * ((j * golden * golden + 0.31) % 1)
+    cx, cy = np.mean(c.x), np.mean(c.y)
+    px, py = cx + fac * (c.x[idx] - cx), cy + fac * (c.y[idx] - cy)
+    x1, y1, x2, y2 = c.x, c.y, np.roll(c.x, -1), np.roll(c.y, -1)
+    crosses = ((y1[None] > py[:, None]) != (y2[None] > py[:, None])) & (
+        px[:, None]
+        < x1[None]
+        + (py[:, None] - y1[None]) * (x2 - x1)[None] / np.where(y2 == y1, 1, y2 - y1)[None]
+    )
+    inside = np.sum(crosses, axis=1) % 2 == 1
+    return px[inside], py[inside]
+
+
+def chief_rows(c, k, incs):
+    r"""CHIEF rows of the p-pol PEC body: inside the body the exterior representation vanishes,
+    :math:`-\int\partial_{n'}G(\mathbf p, \mathbf r')\psi\,ds' = \psi_{inc}(\mathbf p)`.
+
+    Added to the MFIE :math:`(\tfrac12 - D)\psi = \psi_{inc}`, they remove its interior
+    (Dirichlet) resonances, where :math:`J_n(ka) = 0` for a circle: at ka = 20 (J_15(20) = 8e-4)
+    the plain MFIE was 2.4 % off the series at 10 points per wavelength.
+
+    Parameters
+    ----------
+    c : Contour -- closed, normals outward.
+    k : float [rad/m]
+    incs : list of incidences.
+
+    Returns
+    -------
+    rows : ndarray (P, N) complex; rhs : ndarray (P, K) complex.
+    """
+    px, py = chief_points(c, 8 + c.size // 10)
+    dx = c.x[None, :] - px[:, None]
+    dy = c.y[None, :] - py[:, None]
+    R = np.hypot(dx, dy)
+    D = 0.25j * k * hankel2(1, k * R) * (c.nx[None] * dx + c.ny[None] * dy) / R * c.ds[None]
+    rhs = np.stack([inc.field(px, py, k) for inc in incs], axis=1)
+    return -D, rhs
+
+
+def _check_choices(polarization, method, solver, eta):
+    """ValueError for an unknown polarization, method or solver (the fast path: s-pol PEC)."""
+    if polarization not in ("s", "p"):
+        raise ValueError(
+            f"polarization must be 's' (E along z) or 'p' (H along z), got {polarization!r}"
+        )
+    if method not in ("exact", "impedance"):
+        raise ValueError(f"method must be 'exact' or 'impedance', got {method!r}")
+    if solver == "fast" and not (eta is None and polarization == "s"):
+        raise ValueError(
+            "solver='fast' handles the s-pol perfect conductor (eta=None, polarization='s') "
+            "only; use solver='lu' or 'fb'"
+        )
+
+
+def _check_media(c, wavelength, eta, method, min_ppw):
+    """Sampling outside and (exact formulation) inside; warn when the impedance condition is used
+    on a poor conductor."""
+    check_sampling(c, wavelength, min_ppw, "outside")
+    if eta is not None and method == "exact":
+        check_sampling(
+            c,
+            wavelength / abs(eta),
+            min_ppw,
+            f"inside (lambda / |eta| = "
+            f"{wavelength / abs(eta):.3g} m; or method='impedance' for a good conductor)",
+        )
+    if eta is not None and method == "impedance" and abs(eta) < 3:
+        warnings.warn(
+            f"the impedance condition needs |eta| >> 1, got |eta| = {abs(eta):.2f}: expect "
+            "errors of several percent (use method='exact')",
+            stacklevel=3,
+        )
