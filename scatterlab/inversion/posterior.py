@@ -80,7 +80,7 @@ import hashlib
 import json
 import time
 import warnings
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -92,12 +92,15 @@ from scatterlab.inversion.least_squares import (
     DOLP_MARGIN,
     DolpFit,
     IdentifiabilityWarning,
+    check_covariance,
     check_noise,
     check_starts,
+    check_systematic,
     fit_dolp,
     parameter_bounds,
     prepare_data,
 )
+from scatterlab.inversion.options import MODEL_KEYS, resolve_options
 
 __all__ = [
     "sample_posterior",
@@ -123,11 +126,6 @@ PARAMETERS = ("n", "kappa", "sigma")
 KAPPA_FLOOR = 1e-3  # lower end of the log-uniform kappa prior
 RHAT_MAX = 1.01  # between-ensemble R-hat above which the ensembles disagree (Vehtari et al. 2021)
 ACCEPTANCE = (0.15, 0.7)  # acceptance fractions outside this range mean a poorly tuned proposal
-MODEL_KEYS = (
-    "shadowing",
-    "diffuse",
-    "distribution",
-)  # keywords passed on to scatterlab.pbrdf.Model
 
 
 class ConvergenceWarning(UserWarning):
@@ -355,27 +353,8 @@ def _moves_key(moves) -> str:
 
 def _resolve_options(prior, sampler, kw):
     """Split legacy keywords into PriorOptions, SamplerOptions and pBRDF model keywords."""
-    out = []
-    for cls, given, label in ((PriorOptions, prior, "prior"), (SamplerOptions, sampler, "sampler")):
-        names = {f.name for f in fields(cls)}
-        picked = {k: kw.pop(k) for k in list(kw) if k in names}
-        if given is not None and picked:
-            raise ValueError(
-                f"give {sorted(picked)} either inside {label}={cls.__name__}(...) or as keywords, "
-                "not both"
-            )
-        if given is not None and not isinstance(given, cls):
-            raise ValueError(f"{label} must be a {cls.__name__}, got {type(given).__name__}")
-        out.append(given if given is not None else cls(**picked))
-    unknown = sorted(set(kw) - set(MODEL_KEYS))
-    if unknown:
-        allowed = sorted(
-            {f.name for f in fields(PriorOptions)}
-            | {f.name for f in fields(SamplerOptions)}
-            | set(MODEL_KEYS)
-        )
-        raise ValueError(f"unknown keyword(s) {unknown}; allowed: {allowed}")
-    return out[0], out[1], dict(kw)
+    groups = {"prior": (PriorOptions, prior), "sampler": (SamplerOptions, sampler)}
+    return resolve_options(kw, groups, MODEL_KEYS)
 
 
 # -- the problem: data, error model, prior, log posterior
@@ -503,38 +482,15 @@ class PosteriorProblem:
 
 
 def _check_error_model(noise, systematic, covariance, M):
+    """Validated scalar noise (or None), systematic (M,) (or None) and covariance (M, M) (or None)."""
     noise = check_noise(noise)
     if noise is not None and noise.ndim:
         raise ValueError(
             f"noise must be a scalar DOLP standard deviation or None, got shape {noise.shape}"
         )
     noise = None if noise is None else float(noise)
-    if systematic is not None:
-        systematic = (
-            np.broadcast_to(np.asarray(systematic, float), (M,)).copy()
-            if np.ndim(systematic) == 0 or np.shape(systematic) == (M,)
-            else None
-        )
-        if systematic is None or not np.all(np.isfinite(systematic) & (systematic >= 0)):
-            raise ValueError(
-                f"systematic must be a float or an array ({M},) of standard deviations >= 0"
-            )
-    if covariance is not None:
-        if noise is not None:
-            raise ValueError(
-                "give either noise or covariance (the full DOLP error covariance), not both"
-            )
-        covariance = np.asarray(covariance, float)
-        if covariance.shape != (M, M) or not np.all(np.isfinite(covariance)):
-            raise ValueError(
-                f"covariance must be a finite ({M}, {M}) matrix, got shape {covariance.shape}"
-            )
-        if not np.allclose(covariance, covariance.T, rtol=1e-10, atol=0):
-            raise ValueError("covariance must be symmetric")
-        covariance = (covariance + covariance.T) / 2
-        if np.linalg.eigvalsh(covariance)[0] <= 0:
-            raise ValueError("covariance must be positive definite")
-    return noise, systematic, covariance
+    systematic = check_systematic(systematic, M)
+    return noise, systematic, check_covariance(covariance, noise, M)
 
 
 def posterior_problem(
@@ -1302,12 +1258,14 @@ def sample_posterior(
 ) -> Posterior:
     """Sample the posterior of (n, kappa, sigma) given DOLP at M geometries.
 
+    Three pieces: *start* (:func:`posterior_problem`, the least-squares minima, :func:`start_walkers`),
+    *run until converged* (:func:`run_ensembles`) and *diagnose* (:func:`diagnose`).
+
     Parameters
     ----------
     dolp : array (M,)
         Measured DOLP in [0, 1] (a margin of ``max(0.05, 5 x the known error)`` is allowed for
-        noise); NaN
-        entries are masked. For many problems use :func:`sample_posteriors`.
+        noise); NaN entries are masked. For many problems use :func:`sample_posteriors`.
     theta_i, theta_r : array (M,) [rad]
     noise : float or None
         DOLP noise standard deviation (> 0); ``None`` makes it a parameter (log-uniform on
@@ -1318,23 +1276,24 @@ def sample_posterior(
     sigma : float, optional
         Known roughness (then only n and kappa are sampled).
     systematic : float or array (M,), optional
-        Known systematic DOLP error standard deviation per geometry, added in quadrature to the
-        noise.
+        Known systematic DOLP error standard deviation per geometry, added in quadrature.
     covariance : array (M, M), optional
         Full DOLP error covariance (correlated errors across geometries), used instead of ``noise``.
     prior : PriorOptions, optional
         Or the keywords ``bounds``, ``kappa_prior``, ``noise_bounds``.
     sampler : SamplerOptions, optional
         Or the keywords ``n_walkers``, ``n_ensembles``, ``n_steps``, ``max_steps``, ``block``,
-        ``min_tau_multiple``, ``moves``, ``starts``, ``mode_delta_chi2``, ``progress``.
+        ``min_tau_multiple``, ``moves`` (a shortcut string or emcee move objects), ``starts``,
+        ``mode_delta_chi2``, ``progress``.
     backend : path, emcee backend or list of them, optional
         HDF5 file for emcee's backend (checkpoint and resume; group ``<name>/ensemble_<k>``), or
-        emcee
-        backend objects, one per ensemble. Resuming with other data or settings is a ValueError.
+        emcee backend objects, one per ensemble. Resuming with other data or settings is a
+        ValueError.
+    name : str
+        HDF5 group of the chains.
     **options
         The prior and sampler keywords above, and ``shadowing``, ``diffuse``, ``distribution``
-        passed to
-        :class:`scatterlab.pbrdf.Model`.
+        passed to :class:`scatterlab.pbrdf.Model`.
 
     Returns
     -------
@@ -1343,18 +1302,8 @@ def sample_posterior(
     """
     rng = np.random.default_rng(rng)
     prior, opts, model_kw = _resolve_options(prior, sampler, dict(options))
-    problem = posterior_problem(
-        dolp,
-        theta_i,
-        theta_r,
-        noise,
-        phi=phi,
-        sigma=sigma,
-        systematic=systematic,
-        covariance=covariance,
-        prior=prior,
-        model_kw=model_kw,
-    )
+    given = dict(phi=phi, sigma=sigma, systematic=systematic, covariance=covariance, prior=prior)
+    problem = posterior_problem(dolp, theta_i, theta_r, noise, model_kw=model_kw, **given)
     opts.validate(problem.ndim)
     backends, resumed = _open_backends(backend, name, problem, opts)
     messages: list[str] = []
