@@ -186,12 +186,29 @@ def _database_material(shelf: str, book: str, page: str):
 
 
 def names() -> list[str]:
-    """Names of all catalogue entries (database materials, then presets)."""
+    """Names of all catalogue entries (database materials, then presets).
+
+    Returns
+    -------
+    list of str
+        The names, usable with :func:`index` and :func:`material`.
+    """
     return list(_catalogue())
 
 
 def material(name: str) -> Material:
-    """The catalogue record of ``name`` (see :func:`names`); unknown names raise ValueError."""
+    """The catalogue record of ``name`` (see :func:`names`); unknown names raise ValueError.
+
+    Parameters
+    ----------
+    name : str
+        Catalogue name.
+
+    Returns
+    -------
+    Material
+        Description, source, wavelength range [m] and data.
+    """
     cat = _catalogue()
     if name not in cat:
         raise ValueError(f"unknown material {name!r}; name must be one of {sorted(cat)}")

@@ -24,7 +24,22 @@ def _normalised(M):
 
 def plot_elements(data, fit, path):
     """4x4 panels of measured against predicted elements (F00 absolute, log axes; the others
-    normalised by F00), with the 1:1 line. Returns the figure path."""
+    normalised by F00), with the 1:1 line. Returns the figure path.
+
+    Parameters
+    ----------
+    data : scatterlab.io.MuellerBRDF
+        The measured Mueller BRDF (K geometries).
+    fit : PBRDFFit
+        The fit (``predicted`` (K, 4, 4)).
+    path : str or Path
+        PNG file to write.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -78,7 +93,20 @@ def plot_elements(data, fit, path):
 
 
 def plot_residuals(fit, path):
-    """4x4 panels of the weighted residuals against the row of the data. Returns the figure path."""
+    """4x4 panels of the weighted residuals against the row of the data. Returns the figure path.
+
+    Parameters
+    ----------
+    fit : PBRDFFit
+        The fit (``residuals`` (K, 4, 4), ``element_rms`` (4, 4)).
+    path : str or Path
+        PNG file to write.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     import matplotlib
 
     matplotlib.use("Agg", force=False)

@@ -65,7 +65,23 @@ class IdentifiabilityWarning(UserWarning):
 
 
 def model_dolp(n, kappa, sigma, theta_i, theta_r, phi=np.pi, **model_kw) -> np.ndarray:
-    """pBRDF DOLP for parameters ``(...)`` and geometries ``(M,)`` -> ``(..., M)``."""
+    """pBRDF DOLP for parameters ``(...)`` and geometries ``(M,)`` -> ``(..., M)``.
+
+    Parameters
+    ----------
+    n, kappa, sigma : array_like (...)
+        Index ``n - 1j*kappa`` and rms facet slope (broadcast together).
+    theta_i, theta_r : array (M,) [rad]
+        Geometries.
+    phi : float or array (M,) [rad], default pi (specular plane)
+    **model_kw
+        ``shadowing``, ``diffuse``, ``distribution`` of :class:`scatterlab.pbrdf.Model`.
+
+    Returns
+    -------
+    ndarray (..., M)
+        DOLP in [0, 1] (dimensionless).
+    """
     n = np.maximum(np.asarray(n, float), 1e-6)[..., None]
     kappa = np.maximum(np.asarray(kappa, float), 0.0)[..., None]
     sigma = np.asarray(sigma, float)[..., None]
@@ -120,6 +136,22 @@ def prepare_data(dolp, theta_i, theta_r, phi=np.pi, *, margin: float = DOLP_MARG
     ValueError
     naming ``dolp``. Shared by the least-squares fit, the posterior sampler and the design
     functions.
+
+    Parameters
+    ----------
+    dolp : array_like (..., M)
+        Measured DOLP; NaN marks a missing measurement.
+    theta_i, theta_r : array_like (M,) [rad]
+        Geometries, in [0, pi/2].
+    phi : float or array_like (M,) [rad]
+        Azimuth of each geometry.
+    margin : float
+        Allowed excursion outside [0, 1] (>= 0).
+
+    Returns
+    -------
+    tuple
+        ``(dolp (..., M), theta_i (M,), theta_r (M,), phi (M,))`` as float arrays [rad].
     """
     try:
         y = np.asarray(dolp, float)
@@ -160,6 +192,18 @@ def parameter_bounds(bounds, P: int):
 
     ``bounds`` maps any of ``"n"``, ``"kappa"``, ``"sigma"`` to ``(low, high)``; missing names take
     :data:`DEFAULT_BOUNDS`. An unknown name raises a ValueError naming it and the allowed ones.
+
+    Parameters
+    ----------
+    bounds : dict or None
+        ``{name: (low, high)}`` for ``"n"``, ``"kappa"``, ``"sigma"``.
+    P : int
+        Number of fitted parameters (2: n, kappa; 3: with sigma).
+
+    Returns
+    -------
+    lo, hi : ndarray (P,)
+        Lower and upper bounds (n, kappa dimensionless; sigma an rms slope).
     """
     bounds = dict(bounds or {})
     unknown = sorted(set(bounds) - set(DEFAULT_BOUNDS))
@@ -186,7 +230,18 @@ def parameter_bounds(bounds, P: int):
 
 def check_starts(starts):
     """``starts`` as an array (S, 2) of (n, kappa) starting points; empty or malformed is a
-    ValueError."""
+    ValueError.
+
+    Parameters
+    ----------
+    starts : sequence of (n, kappa)
+        Starting points.
+
+    Returns
+    -------
+    ndarray (S, 2)
+        The starting points as floats.
+    """
     try:
         arr = np.asarray(starts, float)
     except (TypeError, ValueError) as exc:
@@ -199,7 +254,20 @@ def check_starts(starts):
 
 
 def check_noise(noise, name: str = "noise"):
-    """A DOLP noise standard deviation: positive and finite (scalar or array), or None."""
+    """A DOLP noise standard deviation: positive and finite (scalar or array), or None.
+
+    Parameters
+    ----------
+    noise : float, array_like or None
+        Standard deviation of the DOLP noise (dimensionless, > 0).
+    name : str
+        Argument name used in the error message.
+
+    Returns
+    -------
+    ndarray or None
+        ``noise`` as a float array (shape kept), or None.
+    """
     if noise is None:
         return None
     try:
@@ -561,6 +629,27 @@ def fit_dolp_per_pixel(
     Same forward model, analytic Jacobian, starts and bounds as :func:`fit_dolp`, so that comparing
     the two
     measures batching alone. No covariance (NaN).
+
+    Parameters
+    ----------
+    dolp : array (..., M)
+        Measured DOLP; NaN entries are left out per pixel.
+    theta_i, theta_r : array (M,) [rad]
+    phi : float or array (M,) [rad], default pi
+    sigma : float or array (...), optional
+        Known roughness (then only n and kappa are fitted).
+    bounds : dict, optional
+        As in :class:`FitOptions`.
+    starts : sequence of (n, kappa)
+    sigma0 : float
+        Starting roughness.
+    **model_kw
+        ``shadowing``, ``diffuse``, ``distribution`` of :class:`scatterlab.pbrdf.Model`.
+
+    Returns
+    -------
+    DolpFit
+        Arrays over the leading axes of ``dolp``; ``covariance`` NaN, ``iterations`` 0.
     """
     y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi)
     starts = check_starts(starts)

@@ -507,7 +507,31 @@ def posterior_problem(
     model_kw=None,
 ) -> PosteriorProblem:
     """Validate the inputs of :func:`sample_posterior` and build its log posterior (the *start*
-    piece)."""
+    piece).
+
+    Parameters
+    ----------
+    dolp : array (M,)
+        Measured DOLP (NaN: missing).
+    theta_i, theta_r : array (M,) [rad]
+    noise : float or None
+        Known DOLP noise standard deviation, or None to infer it.
+    phi : float or array (M,) [rad]
+    sigma : float, optional
+        Known roughness.
+    systematic : float or array (M,), optional
+        Known systematic DOLP standard deviation per geometry.
+    covariance : array (M, M), optional
+        Full DOLP error covariance.
+    prior : PriorOptions, optional
+    model_kw : dict, optional
+        Keywords of :class:`scatterlab.pbrdf.Model`.
+
+    Returns
+    -------
+    PosteriorProblem
+        Validated data and the vectorised log posterior in sampler coordinates.
+    """
     prior = prior if prior is not None else PriorOptions()
     prior.validate()
     model_kw = dict(model_kw or {})
@@ -592,6 +616,29 @@ def local_minima(
     One fit per start; minima closer than 1e-4 (relative, in every parameter) are merged. With
     ``noise``
     unknown, chi-square uses the best fit's residual variance. Best first.
+
+    Parameters
+    ----------
+    dolp : array (M,)
+        Measured DOLP.
+    theta_i, theta_r : array (M,) [rad]
+    phi : float or array (M,) [rad]
+    sigma : float, optional
+        Known roughness.
+    bounds : dict, optional
+        Parameter bounds (see :data:`~scatterlab.inversion.DEFAULT_BOUNDS`).
+    starts : sequence of (n, kappa)
+    noise : float, optional
+        Known DOLP noise standard deviation.
+    delta_chi2 : float
+        Chi-square window above the best minimum.
+    **model_kw
+        ``shadowing``, ``diffuse``, ``distribution`` of :class:`scatterlab.pbrdf.Model`.
+
+    Returns
+    -------
+    list of DolpFit
+        The distinct minima, lowest cost first (empty when no start could be fitted).
     """
     fits = [
         fit_dolp(
@@ -667,7 +714,21 @@ def start_walkers(
     problem: PosteriorProblem, minima: list[DolpFit], n_walkers: int, rng
 ) -> np.ndarray:
     """Starting positions (n_walkers, D) in sampler coordinates: balls around the least-squares
-    minima."""
+    minima.
+
+    Parameters
+    ----------
+    problem : PosteriorProblem
+    minima : list of DolpFit
+        Least-squares minima (walkers are shared among them in turn); empty: the prior's centre.
+    n_walkers : int
+    rng : anything :func:`numpy.random.default_rng` accepts
+
+    Returns
+    -------
+    ndarray (n_walkers, D)
+        Starts strictly inside the prior box, D = the sampled dimensions.
+    """
     rng = np.random.default_rng(rng)
     lo, hi, P, D = problem.lo, problem.hi, problem.P, problem.ndim
     lp = problem.log_post
@@ -899,7 +960,28 @@ def diagnose(
     seconds: float = float("nan"),
 ) -> Posterior:
     """Burn-in, thinning, tau, ESS, between-ensemble R-hat, acceptance and modes ->
-    :class:`Posterior`."""
+    :class:`Posterior`.
+
+    Parameters
+    ----------
+    problem : PosteriorProblem
+    samplers : list of emcee.EnsembleSampler
+        The finished ensembles.
+    options : SamplerOptions
+    minima : list of DolpFit
+        The least-squares minima that seeded the walkers.
+    messages : list of str
+        Notes collected so far (copied, not changed).
+    rng : numpy.random.Generator
+        Seeds the clustering of walkers into modes.
+    seconds : float
+        Sampling time [s] to record.
+
+    Returns
+    -------
+    Posterior
+        Thinned chains in physical units, tau, ESS, R-hat, acceptance, modes and messages.
+    """
     E = len(samplers)
     n_steps = min(s.iteration for s in samplers)
     tau = np.max(
@@ -1357,6 +1439,28 @@ def sample_posteriors(
     ``backend/problem_k.h5``. Convergence warnings are collected in each posterior's ``messages``
     rather than
     raised.
+
+    Parameters
+    ----------
+    dolp : array (K, M)
+        One measurement vector per problem.
+    theta_i, theta_r : array (M,) [rad]
+    noise : float or None
+        As in :func:`sample_posterior`.
+    rng : anything :func:`numpy.random.default_rng` accepts
+    executor : Executor, optional
+        From :func:`scatterlab.runtime.get_executor` (default serial).
+    backend : path, optional
+        Directory for one HDF5 checkpoint per problem.
+    systematic : float, array (M,) or (K, M), optional
+    covariance : array (M, M) or (K, M, M), optional
+    **kw
+        Other keywords of :func:`sample_posterior`.
+
+    Returns
+    -------
+    list of Posterior
+        One per row of ``dolp``, in order.
     """
     from scatterlab.runtime import get_executor
 

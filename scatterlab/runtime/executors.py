@@ -174,6 +174,20 @@ def get_executor(
     """Executor of the given kind: ``"serial"``, ``"processes"`` or ``"dask"``.
 
     A ``scheduler`` address implies ``"dask"``.
+
+    Parameters
+    ----------
+    kind : {"serial", "processes", "dask"}
+        The executor.
+    workers : int, optional
+        Worker processes (default: the machine's cores).
+    scheduler : str, optional
+        Address of a running dask scheduler.
+
+    Returns
+    -------
+    Executor
+        An object with ``map(fn, tasks, desc=...)`` returning the results in task order.
     """
     if scheduler:
         kind = "dask"
@@ -187,7 +201,20 @@ def get_executor(
 
 
 def chunks(seq: Sequence, n: int) -> list[Sequence]:
-    """Split ``seq`` into ``n`` nearly equal consecutive chunks (for batching small tasks)."""
+    """Split ``seq`` into ``n`` nearly equal consecutive chunks (for batching small tasks).
+
+    Parameters
+    ----------
+    seq : sequence
+        The items.
+    n : int
+        Number of chunks (>= 1).
+
+    Returns
+    -------
+    list of sequence
+        ``min(n, len(seq))`` consecutive slices of ``seq``, sizes differing by at most one.
+    """
     if n < 1:
         raise ValueError("n must be >= 1")
     k, r = divmod(len(seq), n)
