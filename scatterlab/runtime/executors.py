@@ -99,24 +99,40 @@ class ProcessExecutor(Executor):
     def map(self, fn, tasks, desc=None):
         tasks = list(tasks)
         futures = {self._pool.submit(fn, t): i for i, t in enumerate(tasks)}
-        out: list = [None] * len(tasks)
-        bar = progress(None, desc=desc, total=len(tasks))
-        try:
-            for fut in cf.as_completed(futures):
-                i = futures[fut]
-                exc = fut.exception()
-                if exc is not None:
-                    for f in futures:
-                        f.cancel()
-                    raise TaskError(i, exc) from exc
-                out[i] = fut.result()
-                bar.update(1)
-        finally:
-            bar.close()
-        return out
+
+        def cancel():
+            for f in futures:
+                f.cancel()
+
+        return _gather(
+            cf.as_completed(futures),
+            futures.__getitem__,
+            lambda f: f.exception(),
+            cancel,
+            len(tasks),
+            desc,
+        )
 
     def close(self):
         self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _gather(completed, index_of, error_of, cancel, n: int, desc):
+    """Results of futures in task order, as they complete, with a progress bar; the first failure
+    cancels the rest and is raised as :class:`TaskError` naming its task."""
+    out: list = [None] * n
+    bar = progress(None, desc=desc, total=n)
+    try:
+        for fut in completed:
+            i, exc = index_of(fut), error_of(fut)
+            if exc is not None:
+                cancel()
+                raise TaskError(i, exc) from exc
+            out[i] = fut.result()
+            bar.update(1)
+    finally:
+        bar.close()
+    return out
 
 
 class DaskExecutor(Executor):
@@ -147,20 +163,18 @@ class DaskExecutor(Executor):
         tasks = list(tasks)
         futures = self.client.map(fn, tasks, pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
-        out: list = [None] * len(tasks)
-        bar = progress(None, desc=desc, total=len(tasks))
-        try:
-            for fut in as_completed(futures):
-                i = index[fut.key]
-                if fut.status == "error":
-                    exc = fut.exception()
-                    self.client.cancel(futures)
-                    raise TaskError(i, exc) from exc
-                out[i] = fut.result()
-                bar.update(1)
-        finally:
-            bar.close()
-        return out
+
+        def error(fut):
+            return fut.exception() if fut.status == "error" else None
+
+        return _gather(
+            as_completed(futures),
+            lambda f: index[f.key],
+            error,
+            lambda: self.client.cancel(futures),
+            len(tasks),
+            desc,
+        )
 
     def close(self):
         self.client.close()
