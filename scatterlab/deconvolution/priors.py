@@ -230,24 +230,33 @@ def _f_and_slope(x, q, a, c3, m):
     return f, df
 
 
+def _wide(lo, hi):
+    """Brackets spanning more than a factor 4 (P = 0 counts as 1e-300): bisected geometrically."""
+    return hi > 4 * np.maximum(lo, 1e-300)
+
+
 def _bisection_point(lo, hi):
-    """Middle of [lo, hi] on the scale the objective sees: geometric while the bracket spans more than a
-    factor 4 above P = 0 (lo = 0 is taken as 1e-300), so an optimum at P ~ 1e-16 is reached in about ten
-    halvings of log P instead of fifty halvings of P; arithmetic otherwise."""
-    lo_pos = np.maximum(lo, 1e-300)
-    return np.where(hi > 4 * lo_pos, np.sqrt(lo_pos * hi), 0.5 * (lo + hi))
+    """Middle of [lo, hi] on the scale the objective sees (its ln P).
+
+    Geometric while the bracket spans more than a factor 4, with the lower end taken as at least
+    ``1e-20 hi`` (and 1e-300): an optimum at P ~ 1e-16 is reached in about ten halvings of ln P, not
+    fifty of P, and one near ``hi`` in about five. Arithmetic otherwise.
+    """
+    lo_eff = np.maximum(np.maximum(lo, 1e-20 * hi), 1e-300)
+    return np.where(_wide(lo, hi), np.sqrt(lo_eff * hi), 0.5 * (lo + hi))
 
 
 def _safeguarded_newton(lo, hi, flo, q, a, c3, m, rtol=1e-13, max_iter=200):
     """Roots of f (:func:`_f_scaled`) in the brackets [lo, hi] (f(lo) has the sign of ``flo``).
 
-    Vectorised Newton iteration safeguarded by bisection (Numerical Recipes' ``rtsafe``): a Newton step
-    that leaves the bracket, is not finite, or does not at least halve the previous step is replaced by
-    :func:`_bisection_point`. Each step keeps the sub-interval where f changes sign, so the bracket always
-    holds a root. Converged when the step or the bracket is below ``rtol`` times min(P, 1 - P) (the
-    objective's ln P and ln(1 - P) need relative accuracy in both, so an optimum at P ~ 1e-16 is resolved,
-    which an absolute tolerance would miss) or below a few units in the last place; iterates only on the
-    unconverged brackets.
+    Vectorised Newton iteration safeguarded by bisection: where the bracket spans more than a
+    factor 4, or a Newton step leaves it or is not finite, the next point is
+    :func:`_bisection_point` (geometric on wide brackets, so an optimum many decades below the
+    bracket's top is approached in ln P). Each step keeps the sub-interval where f changes sign, so
+    the bracket always holds a root. Converged when the step or the bracket is below ``rtol`` times
+    min(P, 1 - P) (the objective's ln P and ln(1 - P) need relative accuracy in both: an optimum at
+    P ~ 1e-16 is resolved, which an absolute tolerance would miss) or below a few units in the last
+    place; iterates only on the unconverged brackets.
 
     Parameters
     ----------
@@ -264,7 +273,7 @@ def _safeguarded_newton(lo, hi, flo, q, a, c3, m, rtol=1e-13, max_iter=200):
     rtol : float
         Relative tolerance on P and on 1 - P.
     max_iter : int
-        Iteration cap (the geometric bisection alone needs about 60 to reach rtol from [1e-300, 1]).
+        Iteration cap.
 
     Returns
     -------
@@ -274,7 +283,6 @@ def _safeguarded_newton(lo, hi, flo, q, a, c3, m, rtol=1e-13, max_iter=200):
     eps = np.finfo(float).eps
     lo, hi, flo = lo.copy(), hi.copy(), flo.copy()
     x = _bisection_point(lo, hi)
-    step_old = hi - lo
     active = np.arange(x.size)
     for _ in range(max_iter):
         if not active.size:
@@ -287,12 +295,11 @@ def _safeguarded_newton(lo, hi, flo, q, a, c3, m, rtol=1e-13, max_iter=200):
         flo[active] = np.where(same, f, flo[active])
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             xn = xa - f / df
-        bad = ~np.isfinite(xn) | (xn <= la) | (xn >= ha)
-        bad |= np.abs(xn - xa) > 0.5 * step_old[active]
-        xn = np.where(bad, _bisection_point(la, ha), xn)
+        bad = ~np.isfinite(xn) | (xn <= la) | (xn >= ha) | _wide(la, ha)
+        if np.any(bad):
+            xn[bad] = _bisection_point(la[bad], ha[bad])
         tol = np.maximum(rtol * np.minimum(xa, 1 - xa), 4 * eps * xa)
         done = (np.abs(xn - xa) <= tol) | (ha - la <= tol) | (f == 0)
-        step_old[active] = np.abs(xn - xa)
         x[active], lo[active], hi[active] = np.where(f == 0, xa, xn), la, ha
         active = active[~done]
     return x
