@@ -78,6 +78,15 @@ def _brute_force_max(T, Q, prior, weight=1.0):
         return np.max(map_objective(grid, T, Q, prior, weight))
 
 
+@pytest.mark.parametrize("c2", [1e15, 1e60, 1e90])
+def test_map_dolp_update_at_the_analytic_optimum_of_stiff_m2_priors(c2):
+    """With c3 = 0, m = 2 and one polarized photon the objective ln P - (c2 P)^2 peaks at
+    P = 1/(sqrt(2) c2), from 7e-16 down to 7e-91: the solve must reach it in ln P."""
+    prior = SuperGaussianPrior(c2, 0.0, 2)
+    P = dolp_update(np.array([1.0]), np.array([1.0]), prior)[0]
+    assert P == pytest.approx(1 / (np.sqrt(2) * c2), rel=1e-10)
+
+
 def test_map_dolp_update_for_an_extremely_stiff_m2_prior():
     """The former strict xfail (the absolute 1e-13 tolerance stopped the Newton solve at P ~ 1e-13): for
     c2 = 1e15, m = 2, c3 = 0 and one photon the objective ln P - (c2 P)^2 peaks at P = 1/(sqrt(2) c2)
