@@ -21,7 +21,22 @@ __all__ = [
 
 
 def as_finite(value, name: str, *, dtype=float) -> np.ndarray:
-    """Return ``value`` as an array of ``dtype``; raise if any element is NaN or inf."""
+    """Return ``value`` as an array of ``dtype``; raise if any element is NaN or inf.
+
+    Parameters
+    ----------
+    value : array_like
+        The input.
+    name : str
+        Argument name used in the error message.
+    dtype : numpy dtype
+        Target dtype (default float).
+
+    Returns
+    -------
+    ndarray
+        ``value`` as an array of ``dtype``, same shape.
+    """
     try:
         arr = np.asarray(value, dtype=dtype)
     except (TypeError, ValueError) as exc:
@@ -44,6 +59,18 @@ def as_index(eta, name: str = "eta") -> np.ndarray:
     ``1e-50 <= |eta| <= 1e50`` (:data:`ETA_MIN`, :data:`ETA_MAX`). ``n = 0`` with ``kappa > 0`` is a
     lossless medium below its plasma frequency and is allowed; ``eta = 0`` is not. A positive
     imaginary part is the other sign convention and is rejected rather than conjugated silently.
+
+    Parameters
+    ----------
+    eta : array_like of complex
+        Complex index ``n - 1j*kappa`` (dimensionless), any shape.
+    name : str
+        Argument name used in the error message.
+
+    Returns
+    -------
+    ndarray of complex
+        ``eta``, same shape.
     """
     arr = as_finite(eta, name, dtype=complex)
     if np.any(arr.imag > 0):
@@ -66,7 +93,22 @@ def as_index(eta, name: str = "eta") -> np.ndarray:
 
 
 def as_angle(theta, name: str = "theta", lo: float = 0.0, hi: float = np.pi / 2) -> np.ndarray:
-    """Validate angles in radians within ``[lo, hi]``."""
+    """Validate angles in radians within ``[lo, hi]``.
+
+    Parameters
+    ----------
+    theta : array_like
+        Angles [rad], any shape.
+    name : str
+        Argument name used in the error message.
+    lo, hi : float
+        Allowed range [rad] (default ``[0, pi/2]``).
+
+    Returns
+    -------
+    ndarray of float
+        ``theta`` [rad], same shape.
+    """
     arr = as_finite(theta, name)
     if np.any(arr < lo) or np.any(arr > hi):
         raise ValueError(f"{name} must be in [{lo:g}, {hi:g}] rad (angles are in radians)")
@@ -74,7 +116,22 @@ def as_angle(theta, name: str = "theta", lo: float = 0.0, hi: float = np.pi / 2)
 
 
 def as_positive(value, name: str, *, allow_zero: bool = False) -> np.ndarray:
-    """Validate a strictly positive (or non-negative) finite real array."""
+    """Validate a strictly positive (or non-negative) finite real array.
+
+    Parameters
+    ----------
+    value : array_like
+        The input (any unit), any shape.
+    name : str
+        Argument name used in the error message.
+    allow_zero : bool
+        Accept zero.
+
+    Returns
+    -------
+    ndarray of float
+        ``value``, same shape.
+    """
     arr = as_finite(value, name)
     bad = arr < 0 if allow_zero else arr <= 0
     if np.any(bad):
@@ -84,7 +141,18 @@ def as_positive(value, name: str, *, allow_zero: bool = False) -> np.ndarray:
 
 
 def broadcast(**arrays) -> list[np.ndarray]:
-    """Broadcast named arrays together; a shape mismatch names the arguments."""
+    """Broadcast named arrays together; a shape mismatch names the arguments.
+
+    Parameters
+    ----------
+    **arrays : array_like
+        The arrays, named for the error message.
+
+    Returns
+    -------
+    list of ndarray
+        The arrays broadcast to their common shape (read-only views), in the order given.
+    """
     try:
         return list(np.broadcast_arrays(*arrays.values()))
     except ValueError as exc:

@@ -271,7 +271,18 @@ def _add_fit_mueller(sub):
 
 
 def main(argv=None) -> int:
-    """Entry point of the ``scatterlab`` command; returns the exit status."""
+    """Entry point of the ``scatterlab`` command; returns the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Command-line arguments without the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status (0 on success).
+    """
     parser = argparse.ArgumentParser(
         prog="scatterlab",
         description=DESCRIPTION,

@@ -161,6 +161,12 @@ def _normal_term(eta: np.ndarray, cos2: np.ndarray, sin2: np.ndarray) -> np.ndar
     return a - 1j * b
 
 
+def _index_and_angle(eta, theta):
+    """Validated ``eta`` (passive, ``1e-50 <= |eta| <= 1e50``) and ``theta`` in [0, pi/2] [rad],
+    broadcast to one shape."""
+    return broadcast(eta=as_index(eta), theta=as_angle(theta))
+
+
 def refraction_term(eta, theta) -> np.ndarray:
     r"""Normal component of the refracted wave vector, :math:`u = \eta\cos\theta_t`.
 
@@ -179,9 +185,7 @@ def refraction_term(eta, theta) -> np.ndarray:
     -------
     u : ndarray of complex, broadcast shape.
     """
-    eta = as_index(eta)
-    theta = as_angle(theta)
-    eta, theta = broadcast(eta=eta, theta=theta)
+    eta, theta = _index_and_angle(eta, theta)
     return _normal_term(eta, np.cos(theta) ** 2, np.sin(theta) ** 2)
 
 
@@ -247,23 +251,15 @@ def reduced_coefficients(
     """
     c = np.asarray(cos_theta, float)
     if isinstance(eta, str):
-        if eta.lower() != "pec":
-            raise ValueError(f"eta must be a complex index n - 1j*kappa or 'pec', got {eta!r}")
-        one = np.ones_like(c)
-        zero = np.zeros_like(c) + 0j if derivative else None
-        return ReducedFresnel(-one + 0j, one + 0j, one, zero, zero)
+        return _reduced_pec(eta, c, derivative)
     if not checked:
-        eta = as_index(eta)
-        c = as_finite(c, "cos_theta")
-        if np.any((c < 0) | (c > 1)):
-            raise ValueError("cos_theta must be in [0, 1]")
-        eta, c = broadcast(eta=eta, cos_theta=c)
+        eta, c = _check_index_and_cosine(eta, c)
     cos2 = c * c
     s2 = (1 - c) * (1 + c) if sin2_theta is None else np.asarray(sin2_theta, float)
     u = _normal_term(eta, cos2, s2)
     eta2 = eta * eta
-    ds = c + u
-    dp = eta2 * c + u
+    ds = c + u  # denominator root of r_s'
+    dp = eta2 * c + u  # denominator root of r_p'
     num_p = eta2 * cos2 - s2
     with np.errstate(divide="ignore", invalid="ignore"):  # eta = 1 at exact grazing: no interface
         rs = 1.0 / (ds * ds)
@@ -271,13 +267,37 @@ def reduced_coefficients(
     f = (1 - eta) * (1 + eta)
     drs, drp = _reduced_derivatives(eta, c, u, ds, dp, num_p) if derivative else (None, None)
     if normalize and _tiny(ds, dp):
-        m = np.maximum(np.abs(rs), np.abs(rp))
-        m = np.where(np.isfinite(m) & (m > 0), m, 1.0)  # eta = 1 at exact grazing: left as is
-        with np.errstate(invalid="ignore"):
-            rs, rp = rs / m, rp / m
-            if derivative:
-                drs, drp = drs / m, drp / m
-        f = f * m
+        return _normalized(rs, rp, f, drs, drp)
+    return ReducedFresnel(rs, rp, f.real**2 + f.imag**2, drs, drp)
+
+
+def _reduced_pec(eta: str, c: np.ndarray, derivative: bool) -> ReducedFresnel:
+    """The perfect conductor's ``rs' = -1, rp' = 1, scale = 1`` (``eta = "pec"``)."""
+    if eta.lower() != "pec":
+        raise ValueError(f"eta must be a complex index n - 1j*kappa or 'pec', got {eta!r}")
+    one = np.ones_like(c)
+    zero = np.zeros_like(c) + 0j if derivative else None
+    return ReducedFresnel(-one + 0j, one + 0j, one, zero, zero)
+
+
+def _check_index_and_cosine(eta, c):
+    """Validated and broadcast ``eta`` and ``cos_theta`` in ``[0, 1]``."""
+    eta = as_index(eta)
+    c = as_finite(c, "cos_theta")
+    if np.any((c < 0) | (c > 1)):
+        raise ValueError("cos_theta must be in [0, 1]")
+    return broadcast(eta=eta, cos_theta=c)
+
+
+def _normalized(rs, rp, f, drs, drp) -> ReducedFresnel:
+    """Divide the reduced factors by ``m = max(|rs|, |rp|)`` and put ``m^2`` into the scale."""
+    m = np.maximum(np.abs(rs), np.abs(rp))
+    m = np.where(np.isfinite(m) & (m > 0), m, 1.0)  # eta = 1 at exact grazing: left as is
+    with np.errstate(invalid="ignore"):
+        rs, rp = rs / m, rp / m
+        if drs is not None:
+            drs, drp = drs / m, drp / m
+    f = f * m
     return ReducedFresnel(rs, rp, f.real**2 + f.imag**2, drs, drp)
 
 
@@ -370,9 +390,7 @@ def coefficients(eta, theta):
     Evaluated in the cancellation-free form given in the module docstring;
     ``|rs|, |rp| <= 1`` for every passive medium.
     """
-    eta = as_index(eta)
-    theta = as_angle(theta)
-    eta, theta = broadcast(eta=eta, theta=theta)
+    eta, theta = _index_and_angle(eta, theta)
     return _coefficients(eta, theta)
 
 
@@ -395,9 +413,7 @@ def transmission_coefficients(eta, theta):
     -------
     ts, tp : ndarray of complex.
     """
-    eta = as_index(eta)
-    theta = as_angle(theta)
-    eta, theta = broadcast(eta=eta, theta=theta)
+    eta, theta = _index_and_angle(eta, theta)
     c = np.cos(theta)
     u = _normal_term(eta, c * c, np.sin(theta) ** 2)
     return 2 * c / (c + u), 2 * eta * c / (eta * eta * c + u)
@@ -424,9 +440,7 @@ def reflectances(eta, theta):
     -------
     Rs, Rp : ndarray of float in ``[0, 1]``, broadcast shape.
     """
-    eta = as_index(eta)
-    theta = as_angle(theta)
-    eta, theta = broadcast(eta=eta, theta=theta)
+    eta, theta = _index_and_angle(eta, theta)
     return _reflectances(eta, theta)
 
 
@@ -450,9 +464,7 @@ def transmittances(eta, theta):
     -------
     Ts, Tp : ndarray of float in ``[0, 1]``.
     """
-    eta = as_index(eta)
-    theta = as_angle(theta)
-    eta, theta = broadcast(eta=eta, theta=theta)
+    eta, theta = _index_and_angle(eta, theta)
     c = np.cos(theta)
     u = _normal_term(eta, c * c, np.sin(theta) ** 2)
     ts = 2 / (c + u)  # t_s / cos(theta)
@@ -488,9 +500,7 @@ def mueller_matrix(eta, theta) -> np.ndarray:
     -------
     M : ndarray, shape ``(..., 4, 4)``, dimensionless.
     """
-    eta = as_index(eta)
-    theta = as_angle(theta)
-    eta, theta = broadcast(eta=eta, theta=theta)
+    eta, theta = _index_and_angle(eta, theta)
     rs, rp = _coefficients(eta, theta)
     return mueller_from_jones_elements(rs, None, None, rp)
 

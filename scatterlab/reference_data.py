@@ -80,7 +80,13 @@ def _files():
 
 
 def names() -> list[str]:
-    """Names of the shipped tables (file stems), sorted."""
+    """Names of the shipped tables (file stems), sorted.
+
+    Returns
+    -------
+    list of str
+        The table names, usable with :func:`table`.
+    """
     return sorted(p.name[:-4] for p in _files().iterdir() if p.name.endswith(".csv"))
 
 
@@ -139,6 +145,16 @@ def table(name: str) -> ReferenceTable:
     """The shipped table ``name`` (see :func:`names`), e.g. ``table("table4_classification")``.
 
     Unknown names raise ValueError listing the allowed ones.
+
+    Parameters
+    ----------
+    name : str
+        Table name (file stem), one of :func:`names`.
+
+    Returns
+    -------
+    ReferenceTable
+        The columns (with units) and their provenance.
     """
     if name not in names():
         raise ValueError(f"unknown reference table {name!r}; name must be one of {names()}")

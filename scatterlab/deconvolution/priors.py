@@ -37,7 +37,19 @@ __all__ = [
 
 @dataclass(frozen=True)
 class SuperGaussianPrior:
-    """Eq. 195 with c1 = 1: ``exp(-[c2 (P - c3)]^m)``."""
+    """Eq. 195 with c1 = 1: ``exp(-[c2 (P - c3)]^m)``.
+
+    Parameters
+    ----------
+    c2 : float
+        Stiffness (> 0, 1/DOLP): the half-width of the plateau is about 1 / c2.
+    c3 : float
+        Centre DOLP in [0, 1].
+    m : int
+        Even order >= 2 (the text's 10).
+    name : str
+        Material class label.
+    """
 
     c2: float
     c3: float
@@ -57,7 +69,18 @@ class SuperGaussianPrior:
     def log_pdf(self, P):
         """``-[c2 (P - c3)]^m`` (Eq. 195, c1 = 1), evaluated in logs so that huge c2^m never overflows: far
         from the centre it is a large finite negative number (floored at -1e300), never -inf or NaN for a
-        finite P."""
+        finite P.
+
+        Parameters
+        ----------
+        P : array_like
+            DOLP (dimensionless), any shape.
+
+        Returns
+        -------
+        ndarray
+            The log prior (nats), shape of ``P``.
+        """
         x = np.abs(self.c2 * (np.asarray(P, float) - self.c3))
         with np.errstate(divide="ignore"):
             logx = np.log(x)
@@ -82,7 +105,24 @@ PRIOR_SETS = {
 
 
 def map_objective(P, T, Q, prior: SuperGaussianPrior | None, weight: float = 1.0):
-    """Complete-data objective of the DOLP at a pixel: Q ln P + (T - Q) ln(1 - P) + w ln Pi(P)."""
+    """Complete-data objective of the DOLP at a pixel: Q ln P + (T - Q) ln(1 - P) + w ln Pi(P).
+
+    Parameters
+    ----------
+    P : array_like
+        DOLP (dimensionless, clipped to (0, 1) so the logs stay finite).
+    T, Q : array_like
+        Expected photon total and polarized total of the pixel (counts); broadcast with ``P``.
+    prior : SuperGaussianPrior or None
+        The prior (Eq. 195); None drops the prior term.
+    weight : float or array_like
+        Weight w of the log prior (dimensionless).
+
+    Returns
+    -------
+    ndarray
+        The objective (nats), shape of ``broadcast(P, T, Q)``.
+    """
     P = np.clip(P, 1e-300, 1 - 1e-16)
     out = Q * np.log(P) + (T - Q) * np.log1p(-P)
     if prior is not None:
@@ -110,14 +150,31 @@ def _f_scaled(P, q, a, c3, m):
 
 
 def dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1.0) -> np.ndarray:
-    """MAP (or, without a prior, ML: Q/T) DOLP update for every pixel; arrays broadcast; result in [0, 1].
+    """MAP (or, without a prior, ML: Q/T) DOLP update for every pixel (Eq. 196).
 
     Pixels with T = 0 (no photons) keep P = 0 for the ML update and the prior's centre with a prior.
     Bracket: with g(P) = a P (P - 1) (P - c3)^(m-1), g >= 0 on [0, c3] and g <= 0 on [c3, 1], so a root
     (g = P - q) lies between q and c3 and nowhere else (P = 0 too when q = 0), and f(min) >= 0 >= f(max).
     Every sign change of f on 9 points spanning [min(q, c3), max(q, c3)] is bracketed, all brackets of all
-    pixels are solved together by Newton steps safeguarded by bisection (a step leaving the bracket is replaced
-    by a halving) to 1e-13, and where a pixel has several roots the one of largest objective is kept.
+    pixels are solved together by Newton steps safeguarded by bisection (:func:`_safeguarded_newton`, to
+    1e-13 relative in P and in 1 - P), and where a pixel has several roots the one of largest objective is
+    kept.
+
+    Parameters
+    ----------
+    T : array_like
+        Expected photon total of the pixel, sum over frames of psi_u + psi_p (counts, >= 0).
+    Q : array_like
+        Expected polarized photon total, sum of psi_p (counts, clipped to >= 0); broadcasts with ``T``.
+    prior : SuperGaussianPrior or None
+        The DOLP prior (Eq. 195); None gives the ML update Q / T.
+    weight : float
+        Weight w of the log prior in the objective (dimensionless, default 1).
+
+    Returns
+    -------
+    ndarray
+        The updated DOLP, shape of ``broadcast(T, Q)``, in [0, 1].
     """
     T = np.asarray(T, float)
     Q = np.clip(np.asarray(Q, float), 0.0, None)
@@ -163,29 +220,85 @@ def dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1
     return np.where(empty, c3, out)
 
 
-def _safeguarded_newton(lo, hi, flo, q, a, c3, m, tol=1e-13, max_iter=100):
-    """Roots of f (:func:`_f_scaled`) in the brackets [lo, hi] (f(lo) has the sign of ``flo``); vectorised
-    Newton with bisection fallback, iterating only on the unconverged brackets."""
+def _f_and_slope(x, q, a, c3, m):
+    """f (:func:`_f_scaled`) and df/dP at ``x``."""
+    u = x - c3
+    um2 = _ipow(u, m - 2) if m > 2 else np.ones_like(u)
+    um1 = um2 * u
+    f = a * x * (x - 1) * um1 - x + q
+    df = a * ((2 * x - 1) * um1 + (m - 1) * x * (x - 1) * um2) - 1
+    return f, df
+
+
+def _wide(lo, hi):
+    """Brackets spanning more than a factor 4 (P = 0 counts as 1e-300): bisected geometrically."""
+    return hi > 4 * np.maximum(lo, 1e-300)
+
+
+def _bisection_point(lo, hi):
+    """Middle of [lo, hi] on the scale the objective sees (its ln P).
+
+    Geometric while the bracket spans more than a factor 4, with the lower end taken as at least
+    ``1e-20 hi`` (and 1e-300): an optimum at P ~ 1e-16 is reached in about ten halvings of ln P, not
+    fifty of P, and one near ``hi`` in about five. Arithmetic otherwise.
+    """
+    lo_eff = np.maximum(np.maximum(lo, 1e-20 * hi), 1e-300)
+    return np.where(_wide(lo, hi), np.sqrt(lo_eff * hi), 0.5 * (lo + hi))
+
+
+def _safeguarded_newton(lo, hi, flo, q, a, c3, m, rtol=1e-13, max_iter=200):
+    """Roots of f (:func:`_f_scaled`) in the brackets [lo, hi] (f(lo) has the sign of ``flo``).
+
+    Vectorised Newton iteration safeguarded by bisection: where the bracket spans more than a
+    factor 4, or a Newton step leaves it or is not finite, the next point is
+    :func:`_bisection_point` (geometric on wide brackets, so an optimum many decades below the
+    bracket's top is approached in ln P). Each step keeps the sub-interval where f changes sign, so
+    the bracket always holds a root. Converged when the step or the bracket is below ``rtol`` times
+    min(P, 1 - P) (the objective's ln P and ln(1 - P) need relative accuracy in both: an optimum at
+    P ~ 1e-16 is resolved, which an absolute tolerance would miss) or below a few units in the last
+    place; iterates only on the unconverged brackets.
+
+    Parameters
+    ----------
+    lo, hi : ndarray, shape (k,)
+        Bracket ends, 0 <= lo < hi <= 1 (DOLP, dimensionless).
+    flo : ndarray, shape (k,)
+        f at ``lo`` (or any value of its sign).
+    q, a : ndarray, shape (k,)
+        q = Q / T and a = w m c2^m / T of each bracket's pixel.
+    c3 : float
+        Prior centre (DOLP).
+    m : int
+        Prior order (even, >= 2).
+    rtol : float
+        Relative tolerance on P and on 1 - P.
+    max_iter : int
+        Iteration cap.
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        The roots (DOLP, dimensionless).
+    """
+    eps = np.finfo(float).eps
     lo, hi, flo = lo.copy(), hi.copy(), flo.copy()
-    x = 0.5 * (lo + hi)
+    x = _bisection_point(lo, hi)
     active = np.arange(x.size)
     for _ in range(max_iter):
         if not active.size:
             break
-        xa, la, ha, qa_, aa = x[active], lo[active], hi[active], q[active], a[active]
-        u = xa - c3
-        um2 = _ipow(u, m - 2) if m > 2 else np.ones_like(u)
-        um1 = um2 * u
-        f = aa * xa * (xa - 1) * um1 - xa + qa_
-        df = aa * ((2 * xa - 1) * um1 + (m - 1) * xa * (xa - 1) * um2) - 1
-        same = np.sign(f) == np.sign(flo[active])
+        xa, la, ha = x[active], lo[active], hi[active]
+        f, df = _f_and_slope(xa, q[active], a[active], c3, m)
+        same = np.signbit(f) == np.signbit(flo[active])
         la = np.where(same, xa, la)
         ha = np.where(same, ha, xa)
         flo[active] = np.where(same, f, flo[active])
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             xn = xa - f / df
-        bad = ~np.isfinite(xn) | (xn <= la) | (xn >= ha)
-        xn = np.where(bad, 0.5 * (la + ha), xn)
+        bad = ~np.isfinite(xn) | (xn <= la) | (xn >= ha) | _wide(la, ha)
+        if np.any(bad):
+            xn[bad] = _bisection_point(la[bad], ha[bad])
+        tol = np.maximum(rtol * np.minimum(xa, 1 - xa), 4 * eps * xa)
         done = (np.abs(xn - xa) <= tol) | (ha - la <= tol) | (f == 0)
         x[active], lo[active], hi[active] = np.where(f == 0, xa, xn), la, ha
         active = active[~done]
@@ -194,7 +307,22 @@ def _safeguarded_newton(lo, hi, flo, q, a, c3, m, tol=1e-13, max_iter=100):
 
 def dolp_update_companion(T, Q, prior: SuperGaussianPrior, weight: float = 1.0) -> float:
     """Reference for one pixel: the real roots in [0, 1] of Eq. 196 by the companion matrix (numpy.roots),
-    the one with the largest objective. Slow and, for c2^m ~ 1e15, needs the scaling by T to stay accurate."""
+    the one with the largest objective. Slow and, for c2^m ~ 1e15, needs the scaling by T to stay accurate.
+
+    Parameters
+    ----------
+    T, Q : float
+        Photon total (> 0) and polarized total (0 <= Q <= T) of the pixel (counts).
+    prior : SuperGaussianPrior
+        The prior (Eq. 195).
+    weight : float
+        Weight of the log prior (dimensionless).
+
+    Returns
+    -------
+    float
+        The MAP DOLP in [0, 1].
+    """
     from numpy.polynomial import polynomial as Pn
 
     m, c3 = prior.m, prior.c3
@@ -217,7 +345,24 @@ def dolp_update_companion(T, Q, prior: SuperGaussianPrior, weight: float = 1.0) 
 def adaptive_priors(dolp, base=PRIOR_SETS["ch5"], *, m: int = 10, mask=None):
     """Priors re-centred from the DOLP histogram (Sec. 8.1.1): two-means on the DOLP values, each prior centred
     on a cluster mean with a half-width of two cluster standard deviations (c2 = 1 / (2 std)), names kept
-    from ``base`` (dielectric = the higher cluster). Extends the classifier toward near-normal geometry."""
+    from ``base`` (dielectric = the higher cluster). Extends the classifier toward near-normal geometry.
+
+    Parameters
+    ----------
+    dolp : array_like
+        DOLP image (any shape, dimensionless); NaN pixels are ignored.
+    base : tuple of SuperGaussianPrior
+        The sets whose names are kept (default Ch. V's).
+    m : int
+        Order of the new priors (even).
+    mask : array_like of bool, optional
+        Pixels to use, shape of ``dolp``.
+
+    Returns
+    -------
+    tuple of SuperGaussianPrior
+        One prior per class, dielectric (higher DOLP) first.
+    """
     from scipy.cluster.vq import kmeans2
 
     v = np.asarray(dolp, float)

@@ -397,38 +397,54 @@ def ecm_calibrate(
         Wrong shapes, NaN intensities, a singular ``B0``, an unknown kind, or a degenerate reference
         set (e.g. no retarder): W is then not determined.
 
-    Notes ----- Steps (module docstring): eigenvalues of ``C_i`` give each reference's (tau, Psi,
-    Delta); the azimuths are fitted so that K has a null vector, which is W; ``A = B0 W^-1``;
-    optionally all of it is refined.
-
-    If W solves the ECM equations with a retarder (Delta, theta), then ``diag(1, 1, 1, -1) W``
+    Notes
+    -----
+    Steps (module docstring): eigenvalues of ``C_i`` give each reference's (tau, Psi, Delta); the
+    azimuths are fitted so that K has a null vector, which is W; ``A = B0 W^-1``; optionally all of
+    it is refined. If W solves the ECM equations with a retarder (Delta, theta), then ``diag(1, 1, 1, -1) W``
     solves them with (-Delta, theta), i.e. the fast axis at theta + 90 deg: the handedness of
     circular polarization is fixed only by knowing which axis of the retarder is fast. Likewise the
     mirror image of every azimuth (theta -> -theta) with ``diag(1, 1, -1, -1) W`` is a solution: the
     sense of rotation of the azimuths, i.e. the sign of S2, is fixed by the nominal azimuths.
     """
     B0, Bs, kinds, Cs, guesses = _parse_references(B0, references)
-    params = [reference_parameters(C, kind) for C, kind in zip(Cs, kinds)]
+    params = [reference_parameters(C, kind) for C, kind in zip(Cs, kinds)]  # step 1: eigenvalues
     problem = _AzimuthProblem(params, Cs, guesses[0] if guesses[0] is not None else 0.0)
-    free, lam, vec = _fit_azimuths(
-        problem, _start_azimuths(problem, kinds, guesses, grid), fit_tolerance
-    )
+    start = _start_azimuths(problem, kinds, guesses, grid)
+    free, lam, vec = _fit_azimuths(problem, start, fit_tolerance)  # step 2: W is K's null vector
     W = vec[:, 0].reshape(4, 4)
     W = W / np.mean(W[0])
-    A = np.linalg.solve(W.T, B0.T).T  # A = B0 W^-1
+    A = np.linalg.solve(W.T, B0.T).T  # step 3: A = B0 W^-1
     azimuths = [problem.fixed] + list(free)
-    quality = float(lam[0] / lam[1])
     if refine:
         W, A, params, azimuths = _refine(B0, Bs, W, A, params, azimuths)
     cond_W, cond_A = np.linalg.cond(W), np.linalg.cond(A)
-    if max(cond_W, cond_A) > warn_condition:
+    _warn_conditioning(cond_W, cond_A, warn_condition)
+    return ECMCalibration(
+        W=W,
+        A=A,
+        quality=float(lam[0] / lam[1]),
+        references=_reference_table(kinds, params, azimuths),
+        eigenvalues=lam[::-1].copy(),
+        cond_W=float(cond_W),
+        cond_A=float(cond_A),
+    )
+
+
+def _warn_conditioning(cond_W: float, cond_A: float, limit: float) -> None:
+    """RuntimeWarning when cond(W) or cond(A) exceeds ``limit`` (noise is amplified by it)."""
+    if max(cond_W, cond_A) > limit:
         warnings.warn(
             f"ill-conditioned calibration: cond(W) = {cond_W:.1f}, cond(A) = {cond_A:.1f} "
-            f"(> {warn_condition}); Mueller errors will be amplified",
+            f"(> {limit}); Mueller errors will be amplified",
             RuntimeWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
-    ref_out = [
+
+
+def _reference_table(kinds, params, azimuths) -> list[dict]:
+    """One dict per reference: kind, tau, psi, delta [rad] and azimuth in [0, pi) [rad]."""
+    return [
         {
             "kind": k,
             "tau": float(p[0]),
@@ -438,12 +454,3 @@ def ecm_calibrate(
         }
         for k, p, a in zip(kinds, params, azimuths)
     ]
-    return ECMCalibration(
-        W=W,
-        A=A,
-        quality=quality,
-        references=ref_out,
-        eigenvalues=lam[::-1].copy(),
-        cond_W=float(cond_W),
-        cond_A=float(cond_A),
-    )

@@ -28,6 +28,7 @@ __all__ = [
     "model_elements",
     "fit_mueller_elements",
     "MuellerFit",
+    "least_squares_from_starts",
 ]
 
 ELEMENTS = ((0, 1), (1, 1), (2, 2), (2, 3))
@@ -189,51 +190,79 @@ def fit_mueller_elements(
         raise ValueError("sigma must be given when fit_sigma is False")
     s0 = sigma0 if sigma is None else float(sigma)
 
-    def residual(p):
-        n, k = p[0], p[1]
+    def residual(p):  # weighted model - measured, p = (n, kappa[, sigma])
         s = p[2] if fit_sigma else s0
-        return (
-            (model_elements(theta, n, k, s, shadowing=shadowing, diffuse=diffuse) - y) * w
-        ).ravel()
+        pred = model_elements(theta, p[0], p[1], s, shadowing=shadowing, diffuse=diffuse)
+        return ((pred - y) * w).ravel()
 
-    lo = [bounds[0][0], bounds[1][0]] + ([bounds[2][0]] if fit_sigma else [])
-    hi = [bounds[0][1], bounds[1][1]] + ([bounds[2][1]] if fit_sigma else [])
+    P = 3 if fit_sigma else 2
+    lo, hi = np.array(bounds, float)[:P].T
+    x0s = [np.clip([n0, k0, s0][:P], lo + 1e-9, hi - 1e-9) for n0, k0 in starts]
+    best = least_squares_from_starts(residual, x0s, lo, hi, tol=1e-15, max_nfev=2000)
+    cov = _covariance(best.jac, 1.0 if std is not None else 2 * best.cost / _dof(best))
+    x = best.x
+    return MuellerFit(
+        n=float(x[0]),
+        kappa=float(x[1]),
+        sigma=float(x[2] if fit_sigma else s0),
+        covariance=cov if fit_sigma else np.pad(cov, ((0, 1), (0, 1))),
+        residuals=best.fun.reshape(-1, 4),
+        cost=float(best.cost),
+        success=bool(best.success),
+        starts=len(starts),
+    )
+
+
+def _dof(res) -> int:
+    """Degrees of freedom (>= 1) of a least-squares result: residuals minus parameters."""
+    return max(1, res.fun.size - res.jac.shape[1])
+
+
+def _covariance(J, s2) -> np.ndarray:
+    """``s2 (J^T J)^-1`` (P, P); infinite where ``J^T J`` is singular."""
+    try:
+        return np.linalg.inv(J.T @ J) * s2
+    except np.linalg.LinAlgError:
+        return np.full((J.shape[1], J.shape[1]), np.inf)
+
+
+def least_squares_from_starts(residual, x0s, lo, hi, *, tol: float, max_nfev: int):
+    """The lowest-cost bounded least-squares solution over several starting points.
+
+    Trust-region reflective (``scipy.optimize.least_squares``, ``x_scale="jac"``) from each start;
+    the first of equal costs wins.
+
+    Parameters
+    ----------
+    residual : callable
+        ``residual(x) -> ndarray (K,)``, the weighted residuals of parameters ``x`` (P,).
+    x0s : sequence of ndarray (P,)
+        Starting points, strictly inside the bounds.
+    lo, hi : array_like (P,)
+        Bounds of the parameters.
+    tol : float
+        ``xtol = ftol = gtol`` of the solver.
+    max_nfev : int
+        Evaluation limit per start.
+
+    Returns
+    -------
+    scipy.optimize.OptimizeResult
+        The best result (``x``, ``cost``, ``fun``, ``jac``, ``success``).
+    """
     best = None
-    for n0, k0 in starts:
-        x0 = np.clip(
-            [n0, k0] + ([s0] if fit_sigma else []), np.array(lo) + 1e-9, np.array(hi) - 1e-9
-        )
+    for x0 in x0s:
         res = optimize.least_squares(
             residual,
             x0,
             bounds=(lo, hi),
             method="trf",
             x_scale="jac",
-            xtol=1e-15,
-            ftol=1e-15,
-            gtol=1e-15,
-            max_nfev=2000,
+            xtol=tol,
+            ftol=tol,
+            gtol=tol,
+            max_nfev=max_nfev,
         )
         if best is None or res.cost < best.cost:
             best = res
-    J = best.jac
-    dof = max(1, best.fun.size - J.shape[1])
-    s2 = 1.0 if std is not None else 2 * best.cost / dof
-    try:
-        cov = np.linalg.inv(J.T @ J) * s2
-    except np.linalg.LinAlgError:
-        cov = np.full((J.shape[1], J.shape[1]), np.inf)
-    x = best.x
-    sig = x[2] if fit_sigma else s0
-    if not fit_sigma:
-        cov = np.pad(cov, ((0, 1), (0, 1)))
-    return MuellerFit(
-        n=float(x[0]),
-        kappa=float(x[1]),
-        sigma=float(sig),
-        covariance=cov,
-        residuals=best.fun.reshape(-1, 4),
-        cost=float(best.cost),
-        success=bool(best.success),
-        starts=len(starts),
-    )
+    return best

@@ -39,9 +39,8 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize
 
-from scatterlab.ellipsometry.fit import IndexFitMixin
+from scatterlab.ellipsometry.fit import IndexFitMixin, least_squares_from_starts
 from scatterlab.pbrdf import Model
 
 __all__ = ["PBRDFFit", "fit_pbrdf", "depolarization_index"]
@@ -341,23 +340,10 @@ def fit_pbrdf(
 
 def _best_fit(prob, starts, sigma0, lo, hi):
     """The lowest-cost least-squares solution over the starting points."""
-    best = None
-    for n0, k0 in starts:
-        x0 = np.clip([n0, k0, sigma0], lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-        res = optimize.least_squares(
-            prob.residual,
-            x0,
-            bounds=(lo, hi),
-            method="trf",
-            x_scale="jac",
-            xtol=1e-12,
-            ftol=1e-12,
-            gtol=1e-12,
-            max_nfev=300,
-        )
-        if best is None or res.cost < best.cost:
-            best = res
-    return best
+    x0s = [
+        np.clip([n0, k0, sigma0], lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)) for n0, k0 in starts
+    ]
+    return least_squares_from_starts(prob.residual, x0s, lo, hi, tol=1e-12, max_nfev=300)
 
 
 def _result(prob, best, data, options, bounds, posterior_steps, walkers, rng) -> PBRDFFit:

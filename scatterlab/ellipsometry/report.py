@@ -24,7 +24,22 @@ def _normalised(M):
 
 def plot_elements(data, fit, path):
     """4x4 panels of measured against predicted elements (F00 absolute, log axes; the others
-    normalised by F00), with the 1:1 line. Returns the figure path."""
+    normalised by F00), with the 1:1 line. Returns the figure path.
+
+    Parameters
+    ----------
+    data : scatterlab.io.MuellerBRDF
+        The measured Mueller BRDF (K geometries).
+    fit : PBRDFFit
+        The fit (``predicted`` (K, 4, 4)).
+    path : str or Path
+        PNG file to write.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -78,7 +93,20 @@ def plot_elements(data, fit, path):
 
 
 def plot_residuals(fit, path):
-    """4x4 panels of the weighted residuals against the row of the data. Returns the figure path."""
+    """4x4 panels of the weighted residuals against the row of the data. Returns the figure path.
+
+    Parameters
+    ----------
+    fit : PBRDFFit
+        The fit (``residuals`` (K, 4, 4), ``element_rms`` (4, 4)).
+    path : str or Path
+        PNG file to write.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -106,16 +134,41 @@ def plot_residuals(fit, path):
 
 
 def _markdown(data, fit, source, convention, seconds) -> str:
-    e = fit.errors
-    dep = fit.depolarization
-    lines = [
-        f"# pBRDF fit to {Path(source).name}",
+    """The report: data and model, estimates, warnings, depolarization, figures, file notes."""
+    lines = [f"# pBRDF fit to {Path(source).name}", ""]
+    lines += _estimates_section(data, fit, convention, seconds)
+    lines += _posterior_and_warnings(fit)
+    lines += _depolarization_section(fit.depolarization)
+    lines += [
+        "## Figures",
         "",
+        "![measured vs predicted elements](elements.png)",
+        "",
+        "![weighted residuals per element](residuals.png)",
+        "",
+    ]
+    if data.notes:
+        lines += ["## Reading the file", ""] + [f"- {n}" for n in data.notes] + [""]
+    return "\n".join(lines)
+
+
+def _estimates_section(data, fit, convention, seconds) -> list[str]:
+    """What was fitted, the estimates with 1-sigma errors and the goodness of fit."""
+    e = fit.errors
+    if fit.weighted:
+        goodness = f"Reduced chi^2 = {fit.reduced_chi2:.4g} ({fit.dof} degrees of freedom)"
+    else:
+        goodness = (
+            f"RMS residual {np.sqrt(fit.reduced_chi2):.3g}"
+            + ("" if fit.normalised else " of the measured m11")
+            + f" ({fit.dof} degrees of freedom); without standard deviations the errors take this "
+            "scatter as the noise"
+        )
+    return [
         f"Data: {len(data)} geometries at {fit.wavelength * 1e6:.6g} um "
         f"({'normalised elements' if fit.normalised else 'absolute elements'}"
         f"{', weighted by their standard deviations' if fit.weighted else ''}); file read with "
-        "time "
-        f"convention {convention}. Model: `pbrdf.Model(sigma, "
+        f"time convention {convention}. Model: `pbrdf.Model(sigma, "
         f"shadowing={fit.options['shadowing']!r}, "
         f"diffuse={fit.options['diffuse']!r})`, all {15 if fit.normalised else 16} elements.",
         "",
@@ -125,19 +178,15 @@ def _markdown(data, fit, source, convention, seconds) -> str:
         f"| kappa | {fit.kappa:.6g} | {e[1]:.3g} |",
         f"| sigma (rms facet slope) | {fit.sigma:.6g} | {e[2]:.3g} |",
         "",
-        (
-            f"Reduced chi^2 = {fit.reduced_chi2:.4g} ({fit.dof} degrees of freedom)"
-            if fit.weighted
-            else f"RMS residual {np.sqrt(fit.reduced_chi2):.3g}"
-            + ("" if fit.normalised else " of the measured m11")
-            + f" ({fit.dof} degrees of freedom); without standard deviations the errors take this "
-            "scatter "
-            "as the noise"
-        )
-        + f"; fit {'converged' if fit.success else 'did NOT converge'}; run time "
-        f"{seconds:.1f} s.",
+        goodness
+        + f"; fit {'converged' if fit.success else 'did NOT converge'}; run time {seconds:.1f} s.",
         "",
     ]
+
+
+def _posterior_and_warnings(fit) -> list[str]:
+    """The emcee summary (when sampled), undetermined parameters and a time-convention hint."""
+    lines = []
     if fit.posterior is not None:
         post = fit.posterior
         med, sd = np.median(post["samples"], 0), post["samples"].std(0)
@@ -151,43 +200,38 @@ def _markdown(data, fit, source, convention, seconds) -> str:
     if not fit.determined:
         lines += [
             "**The data do not determine all three parameters** (rank-deficient Jacobian): the "
-            "errors are "
-            "infinite. Add incidence angles or out-of-plane geometries.",
+            "errors are infinite. Add incidence angles or out-of-plane geometries.",
             "",
         ]
     if fit.circular_flip_ratio < 0.25:
         lines += [
             f"**Time convention?** The data fit {1 / fit.circular_flip_ratio:.3g} times better (in "
-            "cost) "
-            "with their circular elements sign-flipped: the file is probably in the other time "
-            "convention "
-            "(`--time-convention`).",
+            "cost) with their circular elements sign-flipped: the file is probably in the other "
+            "time convention (`--time-convention`).",
             "",
         ]
+    return lines
+
+
+def _depolarization_section(dep: dict) -> list[str]:
+    """Measured and model depolarization, and the share the diffuse term explains."""
     explained = dep["explained"]
-    lines += [
+    if np.isfinite(explained):
+        share = (
+            f"The pBRDF's diffuse term explains {100 * explained:.0f} % of the measured "
+            "depolarization."
+        )
+    else:
+        share = "The sample barely depolarizes (mean < 1e-3)."
+    return [
         "## Depolarization",
         "",
         f"Mean depolarization 1 - P_Delta: measured {dep['measured_mean']:.4g}, pBRDF "
         f"{dep['model_mean']:.4g}. "
-        + (
-            f"The pBRDF's diffuse term explains {100 * explained:.0f} % of the measured "
-            "depolarization."
-            if np.isfinite(explained)
-            else "The sample barely depolarizes (mean < 1e-3)."
-        )
+        + share
         + " (Noise adds to the sum of squared elements and hides depolarization of its own size.)",
         "",
-        "## Figures",
-        "",
-        "![measured vs predicted elements](elements.png)",
-        "",
-        "![weighted residuals per element](residuals.png)",
-        "",
     ]
-    if data.notes:
-        lines += ["## Reading the file", ""] + [f"- {n}" for n in data.notes] + [""]
-    return "\n".join(lines)
 
 
 def write_fit_report(

@@ -18,6 +18,7 @@ from scatterlab.inversion.least_squares import (
     DEFAULT_STARTS,
     DOLP_MARGIN,
     DolpFit,
+    FitOptions,
     IdentifiabilityWarning,
     fit_dolp,
     fit_dolp_per_pixel,
@@ -41,6 +42,7 @@ from scatterlab.inversion.thilak import ThilakFit, thilak_two_step
 __all__ = [
     "fit_dolp",
     "fit_dolp_per_pixel",
+    "FitOptions",
     "DolpFit",
     "model_dolp",
     "DEFAULT_BOUNDS",

@@ -155,6 +155,25 @@ def crlb(
     Parameters as for :func:`fisher_information`. A parameter the design cannot determine (see the
     module
     docstring) has an infinite bound; the others keep their finite bounds.
+
+    Parameters
+    ----------
+    n, kappa, sigma : array_like (...)
+        The true parameters (broadcast); n > 0, kappa >= 0, sigma (rms slope) in [1e-3, 2.5].
+    theta_i, theta_r : array (M,) [rad]
+        The geometries, M >= P.
+    noise : float or array (...)
+        DOLP noise standard deviation (> 0).
+    phi : float or array (M,) [rad], default pi (specular plane)
+    sigma_known : bool
+        Bounds of (n, kappa) only, sigma fixed.
+    **model_kw
+        ``shadowing``, ``diffuse``, ``distribution`` of :class:`scatterlab.pbrdf.Model`.
+
+    Returns
+    -------
+    ndarray (..., P)
+        Standard deviations of (n, kappa[, sigma]) (units of each parameter; inf where undetermined).
     """
     info = fisher_information(
         n, kappa, sigma, theta_i, theta_r, noise, phi, sigma_known=sigma_known, **model_kw

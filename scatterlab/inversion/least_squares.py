@@ -34,6 +34,7 @@ from scipy import optimize
 from scatterlab._checks import as_angle
 from scatterlab.inversion.design import inverse_information
 from scatterlab.inversion.forward import DolpForward
+from scatterlab.inversion.options import DEFAULT_STARTS, FitOptions, resolve_options
 from scatterlab.pbrdf import Model
 
 __all__ = [
@@ -49,11 +50,13 @@ __all__ = [
     "parameter_bounds",
     "check_starts",
     "check_noise",
+    "check_systematic",
+    "check_covariance",
+    "FitOptions",
 ]
 
 PARAMETER_NAMES = ("n", "kappa", "sigma")
 DEFAULT_BOUNDS = {"n": (0.0, 5.0), "kappa": (0.0, 25.0), "sigma": (0.01, 1.5)}
-DEFAULT_STARTS = ((1.5, 0.05), (1.3, 3.0), (3.0, 4.0), (1.0, 10.0), (1.5, 18.0))
 DOLP_MARGIN = 0.05  # how far outside [0, 1] a measured DOLP may fall (noise) before it is refused
 
 
@@ -62,7 +65,23 @@ class IdentifiabilityWarning(UserWarning):
 
 
 def model_dolp(n, kappa, sigma, theta_i, theta_r, phi=np.pi, **model_kw) -> np.ndarray:
-    """pBRDF DOLP for parameters ``(...)`` and geometries ``(M,)`` -> ``(..., M)``."""
+    """pBRDF DOLP for parameters ``(...)`` and geometries ``(M,)`` -> ``(..., M)``.
+
+    Parameters
+    ----------
+    n, kappa, sigma : array_like (...)
+        Index ``n - 1j*kappa`` and rms facet slope (broadcast together).
+    theta_i, theta_r : array (M,) [rad]
+        Geometries.
+    phi : float or array (M,) [rad], default pi (specular plane)
+    **model_kw
+        ``shadowing``, ``diffuse``, ``distribution`` of :class:`scatterlab.pbrdf.Model`.
+
+    Returns
+    -------
+    ndarray (..., M)
+        DOLP in [0, 1] (dimensionless).
+    """
     n = np.maximum(np.asarray(n, float), 1e-6)[..., None]
     kappa = np.maximum(np.asarray(kappa, float), 0.0)[..., None]
     sigma = np.asarray(sigma, float)[..., None]
@@ -117,6 +136,22 @@ def prepare_data(dolp, theta_i, theta_r, phi=np.pi, *, margin: float = DOLP_MARG
     ValueError
     naming ``dolp``. Shared by the least-squares fit, the posterior sampler and the design
     functions.
+
+    Parameters
+    ----------
+    dolp : array_like (..., M)
+        Measured DOLP; NaN marks a missing measurement.
+    theta_i, theta_r : array_like (M,) [rad]
+        Geometries, in [0, pi/2].
+    phi : float or array_like (M,) [rad]
+        Azimuth of each geometry.
+    margin : float
+        Allowed excursion outside [0, 1] (>= 0).
+
+    Returns
+    -------
+    tuple
+        ``(dolp (..., M), theta_i (M,), theta_r (M,), phi (M,))`` as float arrays [rad].
     """
     try:
         y = np.asarray(dolp, float)
@@ -157,6 +192,18 @@ def parameter_bounds(bounds, P: int):
 
     ``bounds`` maps any of ``"n"``, ``"kappa"``, ``"sigma"`` to ``(low, high)``; missing names take
     :data:`DEFAULT_BOUNDS`. An unknown name raises a ValueError naming it and the allowed ones.
+
+    Parameters
+    ----------
+    bounds : dict or None
+        ``{name: (low, high)}`` for ``"n"``, ``"kappa"``, ``"sigma"``.
+    P : int
+        Number of fitted parameters (2: n, kappa; 3: with sigma).
+
+    Returns
+    -------
+    lo, hi : ndarray (P,)
+        Lower and upper bounds (n, kappa dimensionless; sigma an rms slope).
     """
     bounds = dict(bounds or {})
     unknown = sorted(set(bounds) - set(DEFAULT_BOUNDS))
@@ -183,7 +230,18 @@ def parameter_bounds(bounds, P: int):
 
 def check_starts(starts):
     """``starts`` as an array (S, 2) of (n, kappa) starting points; empty or malformed is a
-    ValueError."""
+    ValueError.
+
+    Parameters
+    ----------
+    starts : sequence of (n, kappa)
+        Starting points.
+
+    Returns
+    -------
+    ndarray (S, 2)
+        The starting points as floats.
+    """
     try:
         arr = np.asarray(starts, float)
     except (TypeError, ValueError) as exc:
@@ -196,7 +254,20 @@ def check_starts(starts):
 
 
 def check_noise(noise, name: str = "noise"):
-    """A DOLP noise standard deviation: positive and finite (scalar or array), or None."""
+    """A DOLP noise standard deviation: positive and finite (scalar or array), or None.
+
+    Parameters
+    ----------
+    noise : float, array_like or None
+        Standard deviation of the DOLP noise (dimensionless, > 0).
+    name : str
+        Argument name used in the error message.
+
+    Returns
+    -------
+    ndarray or None
+        ``noise`` as a float array (shape kept), or None.
+    """
     if noise is None:
         return None
     try:
@@ -210,6 +281,66 @@ def check_noise(noise, name: str = "noise"):
             f"{name} must be a positive, finite DOLP standard deviation (or None), got {noise!r}"
         )
     return arr
+
+
+def check_systematic(systematic, M: int):
+    """A known systematic DOLP error standard deviation per geometry, or None.
+
+    Parameters
+    ----------
+    systematic : float, array (M,) or None
+        Standard deviations (DOLP, >= 0, finite).
+    M : int
+        Number of geometries.
+
+    Returns
+    -------
+    ndarray (M,) or None
+        The standard deviations broadcast to one per geometry (a copy).
+    """
+    if systematic is None:
+        return None
+    ok = np.ndim(systematic) == 0 or np.shape(systematic) == (M,)
+    t = np.broadcast_to(np.asarray(systematic, float), (M,)).copy() if ok else None
+    if t is None or not np.all(np.isfinite(t) & (t >= 0)):
+        raise ValueError(
+            f"systematic must be a float or an array ({M},) of standard deviations >= 0"
+        )
+    return t
+
+
+def check_covariance(covariance, noise, M: int):
+    """A full DOLP error covariance across the M geometries, or None.
+
+    Parameters
+    ----------
+    covariance : array (M, M) or None
+        Finite, symmetric (to 1e-10 relative) and positive definite (DOLP^2).
+    noise : object
+        The caller's noise; giving both ``noise`` and ``covariance`` is a ValueError.
+    M : int
+        Number of geometries.
+
+    Returns
+    -------
+    ndarray (M, M) or None
+        The covariance, symmetrised ``(C + C^T) / 2``.
+    """
+    if covariance is None:
+        return None
+    if noise is not None:
+        raise ValueError(
+            "give either noise or covariance (the full DOLP error covariance), not both"
+        )
+    C = np.asarray(covariance, float)
+    if C.shape != (M, M) or not np.all(np.isfinite(C)):
+        raise ValueError(f"covariance must be a finite ({M}, {M}) matrix, got shape {C.shape}")
+    if not np.allclose(C, C.T, rtol=1e-10, atol=0):
+        raise ValueError("covariance must be symmetric")
+    C = (C + C.T) / 2
+    if np.linalg.eigvalsh(C)[0] <= 0:
+        raise ValueError("covariance must be positive definite")
+    return C
 
 
 def _levenberg_marquardt(forward, y0, mask, p, lo, hi, active, max_iter, tol):
@@ -291,29 +422,21 @@ def fit_dolp(
     noise=None,
     systematic=None,
     covariance=None,
-    bounds=None,
-    starts=DEFAULT_STARTS,
-    sigma0: float = 0.3,
-    max_iter: int = 200,
-    tol: float = 1e-12,
-    **model_kw,
+    options: FitOptions | None = None,
+    **kw,
 ) -> DolpFit:
     """Batched bounded least squares of (n, kappa[, sigma]) to DOLP measured at M geometries.
 
     Every pixel runs a Levenberg-Marquardt iteration with its own damping, in one vectorised pass;
-    the
-    Jacobian is analytic in (n, kappa) (:class:`~scatterlab.inversion.forward.DolpForward`). Each
-    start of
-    ``starts`` is run for every pixel and the lowest cost wins per pixel.
+    the Jacobian is analytic in (n, kappa) (:class:`~scatterlab.inversion.forward.DolpForward`).
+    Each start of ``options.starts`` is run for every pixel and the lowest cost wins per pixel.
 
     Parameters
     ----------
     dolp : array (..., M)
         Measured DOLP in [0, 1]; NaN entries are masked. Infinite values, and values outside [0, 1]
-        by more
-        than ``max(DOLP_MARGIN, 5 * noise)`` (0.05 without ``noise``), raise a ValueError: set them
-        to NaN to
-        leave them out.
+        by more than ``max(DOLP_MARGIN, 5 * noise)`` (0.05 without ``noise``), raise a ValueError:
+        set them to NaN to leave them out.
     theta_i, theta_r : array (M,) [rad]
         M >= P, the number of fitted parameters.
     phi : float or array (M,) [rad], default pi (specular plane)
@@ -329,12 +452,12 @@ def fit_dolp(
     covariance : array (M, M), optional
         Full DOLP error covariance (errors correlated across geometries), used instead of ``noise``:
         residuals are whitened with its Cholesky factor. NaN entries of ``dolp`` are then refused.
-    bounds : dict, optional
-        ``{"n": (lo, hi), "kappa": (lo, hi), "sigma": (lo, hi)}``; defaults in ``DEFAULT_BOUNDS``;
-        another key is a ValueError.
-    starts : non-empty sequence of (n, kappa)
-    sigma0 : float -- starting roughness.
-    max_iter, tol : Levenberg-Marquardt limits (iterations per start; relative cost decrease).
+    options : FitOptions, optional
+        ``bounds``, ``starts``, ``sigma0``, ``max_iter``, ``tol``; each may also be given as a
+        keyword (not both).
+    **kw
+        The :class:`FitOptions` keywords, and ``shadowing``, ``diffuse``, ``distribution`` passed to
+        :class:`scatterlab.pbrdf.Model`.
 
     Returns
     -------
@@ -345,42 +468,48 @@ def fit_dolp(
         an infinite variance (NaN covariances), and an :class:`IdentifiabilityWarning` says how many
         pixels are affected.
     """
+    options, model_kw = resolve_options(dict(kw), {"options": (FitOptions, options)})
     noise = check_noise(noise)
     margin = DOLP_MARGIN if noise is None else max(DOLP_MARGIN, 5 * float(np.max(noise)))
     y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi, margin=margin)
-    starts = check_starts(starts)
-    if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1 and tol > 0):
-        raise ValueError(
-            f"max_iter must be a positive integer and tol > 0, got {max_iter!r}, {tol!r}"
-        )
-    fit_sigma = sigma is None
-    P = 3 if fit_sigma else 2
-    if ti.size < P:
-        raise ValueError(
-            f"dolp has {ti.size} geometries; at least {P} are needed to fit {P} parameters"
-        )
-    lo, hi = parameter_bounds(bounds, P)
+    P = 3 if sigma is None else 2
+    starts, lo, hi = _check_fit_setup(options, ti.size, P)
     batch, M = y.shape[:-1], y.shape[-1]
     mask = np.isfinite(y)
     valid = mask.sum(-1) >= P
-    sig_known = None if fit_sigma else np.broadcast_to(np.asarray(sigma, float), batch)
-    forward = DolpForward(ti, tr, ph, sigma=None if fit_sigma else sig_known.ravel(), **model_kw)
+    sig_known = None if sigma is None else np.broadcast_to(np.asarray(sigma, float), batch)
+    forward = DolpForward(
+        ti, tr, ph, sigma=None if sigma is None else sig_known.ravel(), **model_kw
+    )
     y0 = np.where(mask, y, 0.0).reshape(-1, M)
     whiten = _whitening(noise, systematic, covariance, mask)
-    if (
-        whiten is not None
-    ):  # generalised least squares: residuals in units of their standard deviation
+    if whiten is not None:  # generalised least squares: residuals in units of their std
         forward, y0, noise = _Whitened(forward, whiten), y0 @ whiten.T, np.asarray(1.0)
-    s0 = sigma0 if fit_sigma else None
+    s0 = options.sigma0 if sigma is None else None
     p, cost, done, iterations = _best_of_starts(
-        forward, y0, mask.reshape(-1, M), valid.ravel(), starts, s0, lo, hi, max_iter, tol
+        forward, y0, mask.reshape(-1, M), valid.ravel(), starts, s0, lo, hi, options
     )
     p, cost, done = p.reshape(batch + (P,)), cost.reshape(batch), done.reshape(batch)
+    return _fit_result(forward, p, cost, done, iterations, mask, valid, noise, sig_known)
+
+
+def _check_fit_setup(options: FitOptions, M: int, P: int):
+    """Validated starts (S, 2) and bounds ``lo, hi`` (P,) for P parameters from M geometries."""
+    starts = check_starts(options.starts)
+    options.validate()
+    if M < P:
+        raise ValueError(f"dolp has {M} geometries; at least {P} are needed to fit {P} parameters")
+    lo, hi = parameter_bounds(options.bounds, P)
+    return starts, lo, hi
+
+
+def _fit_result(forward, p, cost, done, iterations, mask, valid, noise, sig_known) -> DolpFit:
+    """Covariance, identifiability and the :class:`DolpFit` (NaN where a pixel is not valid)."""
     cov, identifiable = _laplace_covariance(forward, p, mask, cost, noise)
     identifiable = identifiable & valid[..., None]
     _warn_undetermined(valid, identifiable)
     nan = np.where(valid, 1.0, np.nan)
-    sig_out = p[..., 2] if fit_sigma else sig_known
+    sig_out = p[..., 2] if sig_known is None else sig_known
     return DolpFit(
         n=p[..., 0] * nan,
         kappa=p[..., 1] * nan,
@@ -412,7 +541,7 @@ def _warn_undetermined(valid, identifiable):
     )
 
 
-def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, max_iter, tol):
+def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, options: FitOptions):
     """Run LM from every start for the N flattened pixels; keep the lowest cost per pixel."""
     P = lo.size
     best_p = best_cost = best_done = None
@@ -423,7 +552,9 @@ def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, max_iter, 
         if sigma0 is not None:
             p[:, 2] = sigma0
         p = np.clip(p, lo, hi)
-        p, cost, done, it = _levenberg_marquardt(forward, y0, mask, p, lo, hi, valid, max_iter, tol)
+        p, cost, done, it = _levenberg_marquardt(
+            forward, y0, mask, p, lo, hi, valid, options.max_iter, options.tol
+        )
         total_iter += it
         if best_p is None:
             best_p, best_cost, best_done = p, cost, done
@@ -441,28 +572,15 @@ def _whitening(noise, systematic, covariance, mask):
         return None
     M = mask.shape[-1]
     if covariance is not None:
-        if noise is not None:
-            raise ValueError(
-                "give either noise or covariance (the full DOLP error covariance), not both"
-            )
-        V = np.asarray(covariance, float)
-        if V.shape != (M, M) or not np.all(np.isfinite(V)) or not np.allclose(V, V.T, rtol=1e-10):
-            raise ValueError(f"covariance must be a finite symmetric ({M}, {M}) matrix")
+        V = check_covariance(covariance, noise, M)
         if not np.all(mask):
             raise ValueError("covariance with missing (NaN) dolp entries: use sample_posterior")
     elif noise is None or np.ndim(noise):
         raise ValueError("systematic needs a scalar noise (or a covariance) to weight the fit")
     else:
         V = np.eye(M) * float(noise) ** 2
-    t = np.zeros(M) if systematic is None else np.asarray(systematic, float)
-    if not (np.ndim(t) == 0 or t.shape == (M,)) or not np.all(np.isfinite(t) & (t >= 0)):
-        raise ValueError(
-            f"systematic must be a float or an array ({M},) of standard deviations >= 0"
-        )
-    try:
-        L = np.linalg.cholesky(V + np.diag(np.broadcast_to(t, (M,)) ** 2))
-    except np.linalg.LinAlgError as exc:
-        raise ValueError("covariance must be positive definite") from exc
+    t = check_systematic(systematic, M)
+    L = np.linalg.cholesky(V + np.diag(np.zeros(M) if t is None else t**2))
     return np.linalg.inv(L)
 
 
@@ -511,6 +629,27 @@ def fit_dolp_per_pixel(
     Same forward model, analytic Jacobian, starts and bounds as :func:`fit_dolp`, so that comparing
     the two
     measures batching alone. No covariance (NaN).
+
+    Parameters
+    ----------
+    dolp : array (..., M)
+        Measured DOLP; NaN entries are left out per pixel.
+    theta_i, theta_r : array (M,) [rad]
+    phi : float or array (M,) [rad], default pi
+    sigma : float or array (...), optional
+        Known roughness (then only n and kappa are fitted).
+    bounds : dict, optional
+        As in :class:`FitOptions`.
+    starts : sequence of (n, kappa)
+    sigma0 : float
+        Starting roughness.
+    **model_kw
+        ``shadowing``, ``diffuse``, ``distribution`` of :class:`scatterlab.pbrdf.Model`.
+
+    Returns
+    -------
+    DolpFit
+        Arrays over the leading axes of ``dolp``; ``covariance`` NaN, ``iterations`` 0.
     """
     y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi)
     starts = check_starts(starts)

@@ -80,7 +80,7 @@ import hashlib
 import json
 import time
 import warnings
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -92,12 +92,15 @@ from scatterlab.inversion.least_squares import (
     DOLP_MARGIN,
     DolpFit,
     IdentifiabilityWarning,
+    check_covariance,
     check_noise,
     check_starts,
+    check_systematic,
     fit_dolp,
     parameter_bounds,
     prepare_data,
 )
+from scatterlab.inversion.options import MODEL_KEYS, resolve_options
 
 __all__ = [
     "sample_posterior",
@@ -123,11 +126,6 @@ PARAMETERS = ("n", "kappa", "sigma")
 KAPPA_FLOOR = 1e-3  # lower end of the log-uniform kappa prior
 RHAT_MAX = 1.01  # between-ensemble R-hat above which the ensembles disagree (Vehtari et al. 2021)
 ACCEPTANCE = (0.15, 0.7)  # acceptance fractions outside this range mean a poorly tuned proposal
-MODEL_KEYS = (
-    "shadowing",
-    "diffuse",
-    "distribution",
-)  # keywords passed on to scatterlab.pbrdf.Model
 
 
 class ConvergenceWarning(UserWarning):
@@ -355,27 +353,8 @@ def _moves_key(moves) -> str:
 
 def _resolve_options(prior, sampler, kw):
     """Split legacy keywords into PriorOptions, SamplerOptions and pBRDF model keywords."""
-    out = []
-    for cls, given, label in ((PriorOptions, prior, "prior"), (SamplerOptions, sampler, "sampler")):
-        names = {f.name for f in fields(cls)}
-        picked = {k: kw.pop(k) for k in list(kw) if k in names}
-        if given is not None and picked:
-            raise ValueError(
-                f"give {sorted(picked)} either inside {label}={cls.__name__}(...) or as keywords, "
-                "not both"
-            )
-        if given is not None and not isinstance(given, cls):
-            raise ValueError(f"{label} must be a {cls.__name__}, got {type(given).__name__}")
-        out.append(given if given is not None else cls(**picked))
-    unknown = sorted(set(kw) - set(MODEL_KEYS))
-    if unknown:
-        allowed = sorted(
-            {f.name for f in fields(PriorOptions)}
-            | {f.name for f in fields(SamplerOptions)}
-            | set(MODEL_KEYS)
-        )
-        raise ValueError(f"unknown keyword(s) {unknown}; allowed: {allowed}")
-    return out[0], out[1], dict(kw)
+    groups = {"prior": (PriorOptions, prior), "sampler": (SamplerOptions, sampler)}
+    return resolve_options(kw, groups, MODEL_KEYS)
 
 
 # -- the problem: data, error model, prior, log posterior
@@ -503,38 +482,15 @@ class PosteriorProblem:
 
 
 def _check_error_model(noise, systematic, covariance, M):
+    """Validated scalar noise (or None), systematic (M,) (or None) and covariance (M, M) (or None)."""
     noise = check_noise(noise)
     if noise is not None and noise.ndim:
         raise ValueError(
             f"noise must be a scalar DOLP standard deviation or None, got shape {noise.shape}"
         )
     noise = None if noise is None else float(noise)
-    if systematic is not None:
-        systematic = (
-            np.broadcast_to(np.asarray(systematic, float), (M,)).copy()
-            if np.ndim(systematic) == 0 or np.shape(systematic) == (M,)
-            else None
-        )
-        if systematic is None or not np.all(np.isfinite(systematic) & (systematic >= 0)):
-            raise ValueError(
-                f"systematic must be a float or an array ({M},) of standard deviations >= 0"
-            )
-    if covariance is not None:
-        if noise is not None:
-            raise ValueError(
-                "give either noise or covariance (the full DOLP error covariance), not both"
-            )
-        covariance = np.asarray(covariance, float)
-        if covariance.shape != (M, M) or not np.all(np.isfinite(covariance)):
-            raise ValueError(
-                f"covariance must be a finite ({M}, {M}) matrix, got shape {covariance.shape}"
-            )
-        if not np.allclose(covariance, covariance.T, rtol=1e-10, atol=0):
-            raise ValueError("covariance must be symmetric")
-        covariance = (covariance + covariance.T) / 2
-        if np.linalg.eigvalsh(covariance)[0] <= 0:
-            raise ValueError("covariance must be positive definite")
-    return noise, systematic, covariance
+    systematic = check_systematic(systematic, M)
+    return noise, systematic, check_covariance(covariance, noise, M)
 
 
 def posterior_problem(
@@ -551,7 +507,31 @@ def posterior_problem(
     model_kw=None,
 ) -> PosteriorProblem:
     """Validate the inputs of :func:`sample_posterior` and build its log posterior (the *start*
-    piece)."""
+    piece).
+
+    Parameters
+    ----------
+    dolp : array (M,)
+        Measured DOLP (NaN: missing).
+    theta_i, theta_r : array (M,) [rad]
+    noise : float or None
+        Known DOLP noise standard deviation, or None to infer it.
+    phi : float or array (M,) [rad]
+    sigma : float, optional
+        Known roughness.
+    systematic : float or array (M,), optional
+        Known systematic DOLP standard deviation per geometry.
+    covariance : array (M, M), optional
+        Full DOLP error covariance.
+    prior : PriorOptions, optional
+    model_kw : dict, optional
+        Keywords of :class:`scatterlab.pbrdf.Model`.
+
+    Returns
+    -------
+    PosteriorProblem
+        Validated data and the vectorised log posterior in sampler coordinates.
+    """
     prior = prior if prior is not None else PriorOptions()
     prior.validate()
     model_kw = dict(model_kw or {})
@@ -636,6 +616,29 @@ def local_minima(
     One fit per start; minima closer than 1e-4 (relative, in every parameter) are merged. With
     ``noise``
     unknown, chi-square uses the best fit's residual variance. Best first.
+
+    Parameters
+    ----------
+    dolp : array (M,)
+        Measured DOLP.
+    theta_i, theta_r : array (M,) [rad]
+    phi : float or array (M,) [rad]
+    sigma : float, optional
+        Known roughness.
+    bounds : dict, optional
+        Parameter bounds (see :data:`~scatterlab.inversion.DEFAULT_BOUNDS`).
+    starts : sequence of (n, kappa)
+    noise : float, optional
+        Known DOLP noise standard deviation.
+    delta_chi2 : float
+        Chi-square window above the best minimum.
+    **model_kw
+        ``shadowing``, ``diffuse``, ``distribution`` of :class:`scatterlab.pbrdf.Model`.
+
+    Returns
+    -------
+    list of DolpFit
+        The distinct minima, lowest cost first (empty when no start could be fitted).
     """
     fits = [
         fit_dolp(
@@ -711,7 +714,21 @@ def start_walkers(
     problem: PosteriorProblem, minima: list[DolpFit], n_walkers: int, rng
 ) -> np.ndarray:
     """Starting positions (n_walkers, D) in sampler coordinates: balls around the least-squares
-    minima."""
+    minima.
+
+    Parameters
+    ----------
+    problem : PosteriorProblem
+    minima : list of DolpFit
+        Least-squares minima (walkers are shared among them in turn); empty: the prior's centre.
+    n_walkers : int
+    rng : anything :func:`numpy.random.default_rng` accepts
+
+    Returns
+    -------
+    ndarray (n_walkers, D)
+        Starts strictly inside the prior box, D = the sampled dimensions.
+    """
     rng = np.random.default_rng(rng)
     lo, hi, P, D = problem.lo, problem.hi, problem.P, problem.ndim
     lp = problem.log_post
@@ -943,7 +960,28 @@ def diagnose(
     seconds: float = float("nan"),
 ) -> Posterior:
     """Burn-in, thinning, tau, ESS, between-ensemble R-hat, acceptance and modes ->
-    :class:`Posterior`."""
+    :class:`Posterior`.
+
+    Parameters
+    ----------
+    problem : PosteriorProblem
+    samplers : list of emcee.EnsembleSampler
+        The finished ensembles.
+    options : SamplerOptions
+    minima : list of DolpFit
+        The least-squares minima that seeded the walkers.
+    messages : list of str
+        Notes collected so far (copied, not changed).
+    rng : numpy.random.Generator
+        Seeds the clustering of walkers into modes.
+    seconds : float
+        Sampling time [s] to record.
+
+    Returns
+    -------
+    Posterior
+        Thinned chains in physical units, tau, ESS, R-hat, acceptance, modes and messages.
+    """
     E = len(samplers)
     n_steps = min(s.iteration for s in samplers)
     tau = np.max(
@@ -1302,12 +1340,14 @@ def sample_posterior(
 ) -> Posterior:
     """Sample the posterior of (n, kappa, sigma) given DOLP at M geometries.
 
+    Three pieces: *start* (:func:`posterior_problem`, the least-squares minima, :func:`start_walkers`),
+    *run until converged* (:func:`run_ensembles`) and *diagnose* (:func:`diagnose`).
+
     Parameters
     ----------
     dolp : array (M,)
         Measured DOLP in [0, 1] (a margin of ``max(0.05, 5 x the known error)`` is allowed for
-        noise); NaN
-        entries are masked. For many problems use :func:`sample_posteriors`.
+        noise); NaN entries are masked. For many problems use :func:`sample_posteriors`.
     theta_i, theta_r : array (M,) [rad]
     noise : float or None
         DOLP noise standard deviation (> 0); ``None`` makes it a parameter (log-uniform on
@@ -1318,23 +1358,24 @@ def sample_posterior(
     sigma : float, optional
         Known roughness (then only n and kappa are sampled).
     systematic : float or array (M,), optional
-        Known systematic DOLP error standard deviation per geometry, added in quadrature to the
-        noise.
+        Known systematic DOLP error standard deviation per geometry, added in quadrature.
     covariance : array (M, M), optional
         Full DOLP error covariance (correlated errors across geometries), used instead of ``noise``.
     prior : PriorOptions, optional
         Or the keywords ``bounds``, ``kappa_prior``, ``noise_bounds``.
     sampler : SamplerOptions, optional
         Or the keywords ``n_walkers``, ``n_ensembles``, ``n_steps``, ``max_steps``, ``block``,
-        ``min_tau_multiple``, ``moves``, ``starts``, ``mode_delta_chi2``, ``progress``.
+        ``min_tau_multiple``, ``moves`` (a shortcut string or emcee move objects), ``starts``,
+        ``mode_delta_chi2``, ``progress``.
     backend : path, emcee backend or list of them, optional
         HDF5 file for emcee's backend (checkpoint and resume; group ``<name>/ensemble_<k>``), or
-        emcee
-        backend objects, one per ensemble. Resuming with other data or settings is a ValueError.
+        emcee backend objects, one per ensemble. Resuming with other data or settings is a
+        ValueError.
+    name : str
+        HDF5 group of the chains.
     **options
         The prior and sampler keywords above, and ``shadowing``, ``diffuse``, ``distribution``
-        passed to
-        :class:`scatterlab.pbrdf.Model`.
+        passed to :class:`scatterlab.pbrdf.Model`.
 
     Returns
     -------
@@ -1343,18 +1384,8 @@ def sample_posterior(
     """
     rng = np.random.default_rng(rng)
     prior, opts, model_kw = _resolve_options(prior, sampler, dict(options))
-    problem = posterior_problem(
-        dolp,
-        theta_i,
-        theta_r,
-        noise,
-        phi=phi,
-        sigma=sigma,
-        systematic=systematic,
-        covariance=covariance,
-        prior=prior,
-        model_kw=model_kw,
-    )
+    given = dict(phi=phi, sigma=sigma, systematic=systematic, covariance=covariance, prior=prior)
+    problem = posterior_problem(dolp, theta_i, theta_r, noise, model_kw=model_kw, **given)
     opts.validate(problem.ndim)
     backends, resumed = _open_backends(backend, name, problem, opts)
     messages: list[str] = []
@@ -1408,6 +1439,28 @@ def sample_posteriors(
     ``backend/problem_k.h5``. Convergence warnings are collected in each posterior's ``messages``
     rather than
     raised.
+
+    Parameters
+    ----------
+    dolp : array (K, M)
+        One measurement vector per problem.
+    theta_i, theta_r : array (M,) [rad]
+    noise : float or None
+        As in :func:`sample_posterior`.
+    rng : anything :func:`numpy.random.default_rng` accepts
+    executor : Executor, optional
+        From :func:`scatterlab.runtime.get_executor` (default serial).
+    backend : path, optional
+        Directory for one HDF5 checkpoint per problem.
+    systematic : float, array (M,) or (K, M), optional
+    covariance : array (M, M) or (K, M, M), optional
+    **kw
+        Other keywords of :func:`sample_posterior`.
+
+    Returns
+    -------
+    list of Posterior
+        One per row of ``dolp``, in order.
     """
     from scatterlab.runtime import get_executor
 

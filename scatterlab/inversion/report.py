@@ -37,7 +37,19 @@ def _save(fig, path: Path, overwrite: bool) -> None:
 
 def summary_table(post: Posterior, truth=None) -> str:
     """Markdown table: median, 68 % and 95 % intervals, least squares +/- Laplace error (and
-    truth)."""
+    truth).
+
+    Parameters
+    ----------
+    post : Posterior
+    truth : (n, kappa, sigma), optional
+        True values (simulations), shown in an extra column.
+
+    Returns
+    -------
+    str
+        The Markdown table.
+    """
     s = post.summary()["parameters"]
     head = "| parameter | median | 68 % interval | 95 % interval | least squares +/- Laplace |"
     sep = "|---|---|---|---|---|"
@@ -79,6 +91,11 @@ def posterior_report(
         reproducible figure.
     truth : (n, kappa, sigma), optional -- shown beside the estimates (simulations).
     overwrite : bool -- replace existing files (otherwise FileExistsError).
+
+    Returns
+    -------
+    Path
+        The written ``<name>.md``.
     """
     import matplotlib
 
@@ -179,7 +196,24 @@ def _markdown(post, name, truth) -> str:
 def report_index(
     out, entries: dict, *, title: str = "Posterior reports", overwrite: bool = False
 ) -> Path:
-    """``index.md`` linking reports: ``entries`` maps a name to its Posterior."""
+    """``index.md`` linking reports: ``entries`` maps a name to its Posterior.
+
+    Parameters
+    ----------
+    out : str or Path
+        Directory of the reports.
+    entries : dict of str -> Posterior
+        Report name (``<name>.md``) and its posterior.
+    title : str
+        Heading.
+    overwrite : bool
+        Replace an existing ``index.md``.
+
+    Returns
+    -------
+    Path
+        The written ``index.md``.
+    """
     out = Path(out)
     lines = [
         f"# {title}",

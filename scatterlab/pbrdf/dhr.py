@@ -244,6 +244,18 @@ def dhr_sphere_unshadowed(theta_i, sigma) -> np.ndarray:
     ``Phi(a) + sigma tan(theta_i) phi(a)``, ``a = cot(theta_i)/sigma``, with ``Phi, phi``
     the standard normal CDF and density: every facet facing the source reflects,
     including into the lower hemisphere.
+
+    Parameters
+    ----------
+    theta_i : array_like
+        Incidence angles [rad] in ``[0, pi/2]``.
+    sigma : array_like
+        Per-axis rms facet slope (dimensionless, > 0); broadcasts with ``theta_i``.
+
+    Returns
+    -------
+    ndarray
+        The DHR (dimensionless, in [0, 1]), broadcast shape.
     """
     theta = np.asarray(theta_i, float)
     sigma = np.asarray(sigma, float)
@@ -480,6 +492,21 @@ def dhr_slope_quadrature(
     of G are not
     resolved, so the convergence is algebraic (see the test for the measured accuracy against the
     Beckmann-specific :func:`dhr_beckmann`). Used for non-Beckmann distributions.
+
+    Parameters
+    ----------
+    theta_i : array_like
+        Incidence angles [rad] in ``[0, pi/2]``.
+    distribution : FacetDistribution
+        Isotropic facet slope distribution (with a radial quantile).
+    shadowing : {"torrance-sparrow", "none", "smith"} or Shadowing
+    n_w, n_psi : int
+        Quadrature nodes in the radial variable ``w`` and over the visible arc.
+
+    Returns
+    -------
+    ndarray
+        The DHR (dimensionless), shape of ``theta_i``.
     """
     strategy = shadowing_strategy(shadowing)
     theta = np.atleast_1d(np.asarray(theta_i, float))
@@ -597,7 +624,17 @@ def _save_npz(path: Path, data: dict) -> None:
 
 
 def dhr_table(shadowing="torrance-sparrow") -> DHRTable:
-    """The process-wide table for ``shadowing`` (shipped, cached, or built once)."""
+    """The process-wide table for ``shadowing`` (shipped, cached, or built once).
+
+    Parameters
+    ----------
+    shadowing : {"torrance-sparrow", "none", "smith"} or Shadowing
+
+    Returns
+    -------
+    DHRTable
+        Interpolating table of the Beckmann PEC DHR over (theta_i, sigma).
+    """
     return _dhr_table(shadowing_strategy(shadowing).name)
 
 
@@ -610,6 +647,16 @@ def build_shipped_tables(names=SHADOWING) -> list[Path]:
     """Rebuild the tables shipped in ``scatterlab/pbrdf/data``.
 
     ``python -m scatterlab.pbrdf.dhr [NAME ...]``.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Shadowing names to rebuild (default all of :data:`SHADOWING`).
+
+    Returns
+    -------
+    list of Path
+        The written ``.npz`` files.
     """
     out = []
     for shadowing in names:

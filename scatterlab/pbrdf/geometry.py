@@ -108,7 +108,20 @@ class FacetGeometry:
 
 
 def check_angles(theta_i, theta_r, phi):
-    """Validate and broadcast ``theta_i, theta_r`` in [0, pi/2] and finite ``phi`` [rad]."""
+    """Validate and broadcast ``theta_i, theta_r`` in [0, pi/2] and finite ``phi`` [rad].
+
+    Parameters
+    ----------
+    theta_i, theta_r : array_like
+        Incidence and observation angles [rad].
+    phi : array_like
+        Azimuth of observation relative to incidence [rad].
+
+    Returns
+    -------
+    list of ndarray
+        ``[theta_i, theta_r, phi]`` [rad], broadcast to one shape.
+    """
     ti = as_angle(theta_i, "theta_i")
     tr = as_angle(theta_r, "theta_r")
     ph = as_finite(phi, "phi")
@@ -120,6 +133,16 @@ def polar_cos(theta):
 
     ``np.cos(np.pi / 2)`` is 6.1e-17, not 0: without the snap a direction given as grazing would sit
     6e-17 rad above the horizon, where the pBRDF has singular peaks of 1e30 and more.
+
+    Parameters
+    ----------
+    theta : array_like
+        Polar angles [rad].
+
+    Returns
+    -------
+    ndarray
+        ``cos(theta)``, exactly 0 at ``theta == pi/2``, same shape.
     """
     theta = np.asarray(theta, float)
     c = np.cos(theta)
@@ -130,7 +153,18 @@ def polar_cos(theta):
 
 
 def polar_cos_sin(theta):
-    """``cos, sin`` of polar angles in ``[0, pi/2]``, with :func:`polar_cos`'s grazing snap."""
+    """``cos, sin`` of polar angles in ``[0, pi/2]``, with :func:`polar_cos`'s grazing snap.
+
+    Parameters
+    ----------
+    theta : array_like
+        Polar angles [rad].
+
+    Returns
+    -------
+    cos, sin : ndarray
+        Same shape as ``theta``.
+    """
     return polar_cos(theta), np.sin(theta)
 
 
@@ -141,6 +175,16 @@ def azimuth_cos_sin(phi):
     """``cos, sin`` of azimuths; multiples of ``pi/2`` given as floats (``np.pi``) are exact.
 
     So ``phi = np.pi`` is exactly the specular plane on every path (``np.sin(np.pi)`` is 1.2e-16).
+
+    Parameters
+    ----------
+    phi : array_like
+        Azimuths [rad].
+
+    Returns
+    -------
+    cos, sin : ndarray
+        Same shape as ``phi``; exact at multiples of ``pi/2``.
     """
     phi = np.asarray(phi, float)
     q = np.round(phi / (np.pi / 2))
@@ -221,6 +265,16 @@ def in_plane_geometry(theta_i, theta_r) -> FacetGeometry:
 
     ``beta = (theta_i + theta_r)/2``, ``alpha = (theta_i - theta_r)/2``; the rotations vanish.
     Equal to :func:`facet_geometry` at ``phi = pi`` to rounding (tested). Inputs already validated.
+
+    Parameters
+    ----------
+    theta_i, theta_r : ndarray
+        Incidence and observation angles [rad] in ``[0, pi/2]``, validated and broadcast.
+
+    Returns
+    -------
+    FacetGeometry
+        Facet angles of the specular plane, rotations zero.
     """
     beta = (theta_i + theta_r) / 2
     half = (theta_i - theta_r) / 2

@@ -38,7 +38,23 @@ __all__ = [
 
 
 def torrance_sparrow(cos_alpha, cos_beta, cos_theta_i, cos_theta_r) -> np.ndarray:
-    """Eq. 172 (Blinn's form of the Torrance-Sparrow V-groove function)."""
+    """Eq. 172 (Blinn's form of the Torrance-Sparrow V-groove function).
+
+    Parameters
+    ----------
+    cos_alpha : array_like
+        Cosine of the facet tilt from the mean surface normal.
+    cos_beta : array_like
+        Cosine of the angle between the facet normal and the incident (or reflected) direction.
+    cos_theta_i, cos_theta_r : array_like
+        Cosines of the incidence and observation angles.
+
+    Returns
+    -------
+    ndarray
+        ``G = min(1, 2 cos(alpha) cos(theta_i) / cos(beta), 2 cos(alpha) cos(theta_r) / cos(beta))``
+        in [0, 1], broadcast shape.
+    """
     k = _v_groove_slope(cos_alpha, cos_beta)
     return np.clip(np.minimum(k * cos_theta_r, k * cos_theta_i), 0.0, 1.0)
 
@@ -50,7 +66,20 @@ def _v_groove_slope(cos_alpha, cos_beta):
 
 
 def smith(distribution, cos_theta_i, cos_theta_r) -> np.ndarray:
-    """Height-correlated Smith function for ``distribution``."""
+    """Height-correlated Smith function for ``distribution``.
+
+    Parameters
+    ----------
+    distribution : FacetDistribution
+        Facet slope distribution with a closed-form ``smith_lambda``.
+    cos_theta_i, cos_theta_r : array_like
+        Cosines of the incidence and observation angles.
+
+    Returns
+    -------
+    ndarray
+        ``G = 1 / (1 + Lambda(theta_i) + Lambda(theta_r))`` in [0, 1], broadcast shape.
+    """
 
     def tan_of(c):
         c = np.clip(c, 0.0, 1.0)
@@ -145,7 +174,18 @@ SHADOWING = tuple(_BY_NAME)
 
 
 def shadowing_strategy(shadowing) -> Shadowing:
-    """The :class:`Shadowing` for a name in :data:`SHADOWING` (or the object itself)."""
+    """The :class:`Shadowing` for a name in :data:`SHADOWING` (or the object itself).
+
+    Parameters
+    ----------
+    shadowing : str or Shadowing
+        ``"torrance-sparrow"``, ``"smith"`` or ``"none"``, or a :class:`Shadowing` object.
+
+    Returns
+    -------
+    Shadowing
+        The strategy object.
+    """
     if isinstance(shadowing, Shadowing):
         return shadowing
     try:
@@ -157,7 +197,22 @@ def shadowing_strategy(shadowing) -> Shadowing:
 
 
 def shadowing_factor(kind, geometry, distribution) -> np.ndarray:
-    """G itself for a :class:`~scatterlab.pbrdf.geometry.FacetGeometry` and shadowing ``kind``."""
+    """G itself for a :class:`~scatterlab.pbrdf.geometry.FacetGeometry` and shadowing ``kind``.
+
+    Parameters
+    ----------
+    kind : str or Shadowing
+        The shadowing function.
+    geometry : FacetGeometry
+        Facet angles of the geometries.
+    distribution : FacetDistribution
+        Facet slopes (used by Smith).
+
+    Returns
+    -------
+    ndarray
+        G in [0, 1], the geometry's shape.
+    """
     strategy = shadowing_strategy(kind)
     g = strategy.g_over_cos(geometry, distribution) * geometry.cos_theta_i * geometry.cos_theta_r
     return np.clip(np.where(np.isfinite(g), g, 0.0), 0.0, 1.0)

@@ -99,24 +99,40 @@ class ProcessExecutor(Executor):
     def map(self, fn, tasks, desc=None):
         tasks = list(tasks)
         futures = {self._pool.submit(fn, t): i for i, t in enumerate(tasks)}
-        out: list = [None] * len(tasks)
-        bar = progress(None, desc=desc, total=len(tasks))
-        try:
-            for fut in cf.as_completed(futures):
-                i = futures[fut]
-                exc = fut.exception()
-                if exc is not None:
-                    for f in futures:
-                        f.cancel()
-                    raise TaskError(i, exc) from exc
-                out[i] = fut.result()
-                bar.update(1)
-        finally:
-            bar.close()
-        return out
+
+        def cancel():
+            for f in futures:
+                f.cancel()
+
+        return _gather(
+            cf.as_completed(futures),
+            futures.__getitem__,
+            lambda f: f.exception(),
+            cancel,
+            len(tasks),
+            desc,
+        )
 
     def close(self):
         self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _gather(completed, index_of, error_of, cancel, n: int, desc):
+    """Results of futures in task order, as they complete, with a progress bar; the first failure
+    cancels the rest and is raised as :class:`TaskError` naming its task."""
+    out: list = [None] * n
+    bar = progress(None, desc=desc, total=n)
+    try:
+        for fut in completed:
+            i, exc = index_of(fut), error_of(fut)
+            if exc is not None:
+                cancel()
+                raise TaskError(i, exc) from exc
+            out[i] = fut.result()
+            bar.update(1)
+    finally:
+        bar.close()
+    return out
 
 
 class DaskExecutor(Executor):
@@ -147,20 +163,18 @@ class DaskExecutor(Executor):
         tasks = list(tasks)
         futures = self.client.map(fn, tasks, pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
-        out: list = [None] * len(tasks)
-        bar = progress(None, desc=desc, total=len(tasks))
-        try:
-            for fut in as_completed(futures):
-                i = index[fut.key]
-                if fut.status == "error":
-                    exc = fut.exception()
-                    self.client.cancel(futures)
-                    raise TaskError(i, exc) from exc
-                out[i] = fut.result()
-                bar.update(1)
-        finally:
-            bar.close()
-        return out
+
+        def error(fut):
+            return fut.exception() if fut.status == "error" else None
+
+        return _gather(
+            as_completed(futures),
+            lambda f: index[f.key],
+            error,
+            lambda: self.client.cancel(futures),
+            len(tasks),
+            desc,
+        )
 
     def close(self):
         self.client.close()
@@ -174,6 +188,20 @@ def get_executor(
     """Executor of the given kind: ``"serial"``, ``"processes"`` or ``"dask"``.
 
     A ``scheduler`` address implies ``"dask"``.
+
+    Parameters
+    ----------
+    kind : {"serial", "processes", "dask"}
+        The executor.
+    workers : int, optional
+        Worker processes (default: the machine's cores).
+    scheduler : str, optional
+        Address of a running dask scheduler.
+
+    Returns
+    -------
+    Executor
+        An object with ``map(fn, tasks, desc=...)`` returning the results in task order.
     """
     if scheduler:
         kind = "dask"
@@ -187,7 +215,20 @@ def get_executor(
 
 
 def chunks(seq: Sequence, n: int) -> list[Sequence]:
-    """Split ``seq`` into ``n`` nearly equal consecutive chunks (for batching small tasks)."""
+    """Split ``seq`` into ``n`` nearly equal consecutive chunks (for batching small tasks).
+
+    Parameters
+    ----------
+    seq : sequence
+        The items.
+    n : int
+        Number of chunks (>= 1).
+
+    Returns
+    -------
+    list of sequence
+        ``min(n, len(seq))`` consecutive slices of ``seq``, sizes differing by at most one.
+    """
     if n < 1:
         raise ValueError("n must be >= 1")
     k, r = divmod(len(seq), n)

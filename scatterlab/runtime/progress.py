@@ -37,7 +37,13 @@ class _NullBar:
 
 
 def progress_enabled() -> bool:
-    """Whether bars are shown: ``SCATTERLAB_PROGRESS`` if set, else whether stderr is a terminal."""
+    """Whether bars are shown: ``SCATTERLAB_PROGRESS`` if set, else whether stderr is a terminal.
+
+    Returns
+    -------
+    bool
+        True when progress bars are shown.
+    """
     env = os.environ.get("SCATTERLAB_PROGRESS")
     if env is not None:
         return env not in ("0", "", "false", "no")
@@ -45,7 +51,23 @@ def progress_enabled() -> bool:
 
 
 def progress(iterable=None, *, desc: str | None = None, total: int | None = None):
-    """A tqdm progress bar over ``iterable`` (or a manual bar with ``update``), or a silent stand-in."""
+    """A tqdm progress bar over ``iterable`` (or a manual bar with ``update``), or a silent stand-in.
+
+    Parameters
+    ----------
+    iterable : iterable, optional
+        What to iterate over (None: a manual bar advanced with ``update``).
+    desc : str, optional
+        Label of the bar.
+    total : int, optional
+        Number of items (when ``iterable`` has no length).
+
+    Returns
+    -------
+    tqdm or stand-in
+        Iterable (and ``update``/``close``-able) bar; a silent object of the same interface when bars
+        are off or tqdm is missing.
+    """
     if not progress_enabled():
         return _NullBar(iterable)
     try:

@@ -28,7 +28,22 @@ __all__ = [
 
 
 def atomic_write_bytes(path, data: bytes, *, overwrite: bool = False) -> Path:
-    """Write ``data`` to ``path`` atomically; raise FileExistsError if it exists and not ``overwrite``."""
+    """Write ``data`` to ``path`` atomically; raise FileExistsError if it exists and not ``overwrite``.
+
+    Parameters
+    ----------
+    path : str or Path
+        Destination file (its directory is created).
+    data : bytes
+        Contents.
+    overwrite : bool
+        Replace an existing file.
+
+    Returns
+    -------
+    Path
+        The written path.
+    """
     path = Path(path)
     if path.exists() and not overwrite:
         raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
@@ -51,12 +66,38 @@ def atomic_write_bytes(path, data: bytes, *, overwrite: bool = False) -> Path:
 
 
 def write_text(path, text: str, *, overwrite: bool = False) -> Path:
-    """Atomically write UTF-8 text."""
+    """Atomically write UTF-8 text.
+
+    Parameters
+    ----------
+    path : str or Path
+        Destination file.
+    text : str
+        Contents.
+    overwrite : bool
+        Replace an existing file.
+
+    Returns
+    -------
+    Path
+        The written path.
+    """
     return atomic_write_bytes(path, text.encode("utf-8"), overwrite=overwrite)
 
 
 def to_jsonable(obj: Any) -> Any:
-    """Convert numpy scalars/arrays and complex numbers to JSON-friendly Python objects."""
+    """Convert numpy scalars/arrays and complex numbers to JSON-friendly Python objects.
+
+    Parameters
+    ----------
+    obj : object
+        Nested dicts, lists, tuples, numpy scalars and arrays, complex numbers.
+
+    Returns
+    -------
+    object
+        The same structure of JSON types (complex as ``{"re": .., "im": ..}``).
+    """
     if isinstance(obj, dict):
         return {str(k): to_jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
@@ -75,19 +116,60 @@ def to_jsonable(obj: Any) -> Any:
 
 
 def write_json(path, obj: Any, *, overwrite: bool = False) -> Path:
-    """Atomically write ``obj`` as indented JSON (numpy types converted)."""
+    """Atomically write ``obj`` as indented JSON (numpy types converted).
+
+    Parameters
+    ----------
+    path : str or Path
+        Destination file.
+    obj : object
+        Anything :func:`to_jsonable` converts.
+    overwrite : bool
+        Replace an existing file.
+
+    Returns
+    -------
+    Path
+        The written path.
+    """
     return write_text(
         path, json.dumps(to_jsonable(obj), indent=2, sort_keys=False) + "\n", overwrite=overwrite
     )
 
 
 def read_json(path) -> Any:
-    """Read a JSON file."""
+    """Read a JSON file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A JSON file.
+
+    Returns
+    -------
+    object
+        The decoded contents.
+    """
     return json.loads(Path(path).read_text(encoding="utf-8"))
 
 
 def write_npz(path, *, overwrite: bool = False, **arrays) -> Path:
-    """Atomically write arrays to a compressed ``.npz``."""
+    """Atomically write arrays to a compressed ``.npz``.
+
+    Parameters
+    ----------
+    path : str or Path
+        Destination file.
+    overwrite : bool
+        Replace an existing file.
+    **arrays : array_like
+        The arrays, by name.
+
+    Returns
+    -------
+    Path
+        The written path.
+    """
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)
     return atomic_write_bytes(path, buf.getvalue(), overwrite=overwrite)

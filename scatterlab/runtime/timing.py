@@ -30,6 +30,22 @@ def best_time(
     """Best-of-``repeat`` wall time [s] of ``number`` calls of ``fn``, divided by ``number``.
 
     Stops early once ``budget`` seconds have been spent (at least one repeat runs).
+
+    Parameters
+    ----------
+    fn : callable
+        The work, called without arguments.
+    repeat : int
+        Number of timed repeats (at most).
+    number : int
+        Calls per repeat.
+    budget : float
+        Time budget [s].
+
+    Returns
+    -------
+    float
+        Best time per call [s].
     """
     if repeat < 1 or number < 1:
         raise ValueError("repeat and number must be >= 1")
@@ -48,5 +64,20 @@ def best_time(
 
 
 def throughput(fn: Callable[[], object], n_evaluations: int, **kw) -> float:
-    """Evaluations per second of ``fn`` that performs ``n_evaluations`` evaluations per call."""
+    """Evaluations per second of ``fn`` that performs ``n_evaluations`` evaluations per call.
+
+    Parameters
+    ----------
+    fn : callable
+        The work, called without arguments.
+    n_evaluations : int
+        Evaluations one call performs.
+    **kw
+        Passed to :func:`best_time`.
+
+    Returns
+    -------
+    float
+        Evaluations per second [1/s].
+    """
     return n_evaluations / best_time(fn, **kw)

@@ -10,6 +10,7 @@ import pytest
 
 from scatterlab.inversion import (
     ConvergenceWarning,
+    FitOptions,
     IdentifiabilityWarning,
     crlb,
     fit_dolp,
@@ -28,6 +29,23 @@ def quiet(*a, **kw):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
         return sample_posterior(*a, **kw)
+
+
+def test_fit_options_and_the_old_keywords_are_the_same_fit():
+    """FitOptions groups bounds, starts, sigma0, max_iter and tol; the keywords still work, giving
+    one both ways or an unknown keyword is a ValueError naming it."""
+    y = model_dolp(*PAINT, TI, TR)
+    kw = dict(starts=((1.5, 0.05), (3.0, 4.0)), sigma0=0.2, max_iter=50, tol=1e-10)
+    a = fit_dolp(y, TI, TR, **kw)
+    b = fit_dolp(y, TI, TR, options=FitOptions(**kw))
+    np.testing.assert_array_equal([a.n, a.kappa, a.sigma], [b.n, b.kappa, b.sigma])
+    np.testing.assert_allclose([a.n, a.kappa, a.sigma], PAINT, rtol=1e-6)  # noise-free truth
+    with pytest.raises(ValueError, match="starts"):
+        fit_dolp(y, TI, TR, options=FitOptions(), starts=((1.5, 0.05),))
+    with pytest.raises(ValueError, match="unknown keyword.*sigma_0"):
+        fit_dolp(y, TI, TR, sigma_0=0.3)
+    with pytest.raises(ValueError, match="max_iter"):
+        fit_dolp(y, TI, TR, options=FitOptions(max_iter=0))
 
 
 @pytest.mark.parametrize("bad", [1.5, -0.2, 1e300, np.inf, -np.inf])
