@@ -21,7 +21,6 @@ import scatterlab
 # Subpackages whose public functions do not all have Parameters/Returns yet (being fixed by their
 # owners): shrink this list as they pass.
 UNDOCUMENTED = {
-    "characterization",
     "deconvolution",
     "imaging",
     "io",
