@@ -23,6 +23,7 @@ from scatterlab._checks import as_angle, as_index, broadcast
 from scatterlab.fresnel import reduced_coefficients, smooth_dolp
 from scatterlab.pbrdf.geometry import FacetGeometry, check_angles, facet_geometry, polar_cos_sin
 from scatterlab.polarization.mueller import mueller_from_jones_elements
+from scatterlab.polarization.stokes import dolp as stokes_dolp
 
 __all__ = ["facet_jones", "facet_dolp", "dolp_smooth_facet", "dolp_thilak"]
 
@@ -85,10 +86,8 @@ def facet_dolp(eta, theta_i, theta_r, phi=np.pi) -> np.ndarray:
     geo = facet_geometry(ti, tr, ph, checked=True)
     a, b, c, d, _ = facet_jones(eta, geo)
     m = mueller_from_jones_elements(a, b, c, d, shape=(3, 1))[..., 0]
-    with np.errstate(invalid="ignore"):  # beta = 90 deg: R_s = R_p = 1 (the limit at eta = 1 too)
-        return np.where(
-            geo.cos_beta == 0, 0.0, np.clip(np.hypot(m[..., 1], m[..., 2]) / m[..., 0], 0.0, 1.0)
-        )
+    # beta = 90 deg: R_s = R_p = 1 (the limit at eta = 1 too)
+    return np.where(geo.cos_beta == 0, 0.0, np.clip(stokes_dolp(m), 0.0, 1.0))
 
 
 def dolp_smooth_facet(eta, beta) -> np.ndarray:
