@@ -317,7 +317,7 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
         )
         for _ in range(samples)
     ]
-    regions = [_bias_corrected(r, np.stack([d[r.name] for d in draws])) for r in regions]
+    regions = [_bias_corrected(r, np.stack([d[r.name].mean for d in draws])) for r in regions]
     estimates = region_posteriors(
         regions, thetas, settings.sigma, rng, n_steps=settings.posterior_steps, executor=executor
     )
