@@ -96,7 +96,13 @@ def _studies_package() -> ModuleType:
 
 
 def studies_dir() -> Path:
-    """Folder holding the study scripts (``$SCATTERLAB_STUDIES``, else the package's folder)."""
+    """Folder holding the study scripts (``$SCATTERLAB_STUDIES``, else the package's folder).
+
+    Returns
+    -------
+    pathlib.Path
+        The studies folder.
+    """
     env = os.environ.get("SCATTERLAB_STUDIES")
     if env:
         return Path(env)
@@ -177,7 +183,13 @@ def discover(folder: Path | None = None) -> dict[str, Study]:
 
 
 def package_versions() -> dict[str, str]:
-    """Versions of Python, scatterlab and the scientific packages that are importable."""
+    """Versions of Python, scatterlab and the scientific packages that are importable.
+
+    Returns
+    -------
+    dict of str to str
+        Version by name: ``"python"``, ``"platform"``, ``"scatterlab"`` and each importable package.
+    """
     import importlib.metadata as md
 
     out = {"python": platform.python_version(), "platform": platform.platform()}
@@ -344,9 +356,29 @@ def run_all(
     force: bool = False,
     executor: Executor | None = None,
 ) -> tuple[Path, dict[str, str]]:
-    """Run every study into ``out/<id>``, write ``out/index.md``; return (index path, status by id).
+    """Run every study into ``out/<id>``, write ``out/index.md``.
 
     A failing study is recorded in the index (with its error) and the others still run.
+
+    Parameters
+    ----------
+    out : str or os.PathLike, optional
+        Output folder; default ``results/quick`` or ``results/full``.
+    quick : bool
+        Run the studies in quick mode (smaller grids and fewer samples).
+    seed : int
+        Random seed passed to every study.
+    force : bool
+        Recompute studies whose results already exist.
+    executor : Executor, optional
+        Executor for the studies' parallel work.
+
+    Returns
+    -------
+    index : pathlib.Path
+        Path of ``out/index.md``.
+    status : dict of str to str
+        ``"ok"`` or ``"failed: <error>"`` by study id.
     """
     out = Path(out) if out else Path("results") / ("quick" if quick else "full")
     status: dict[str, str] = {}

@@ -20,15 +20,7 @@ import scatterlab
 
 # Subpackages whose public functions do not all have Parameters/Returns yet (being fixed by their
 # owners): shrink this list as they pass.
-UNDOCUMENTED = {
-    "deconvolution",
-    "imaging",
-    "io",
-    "mom",
-    "plotting",
-    "polarization",
-    "study_runner",
-}
+UNDOCUMENTED: set[str] = set()
 
 
 def _modules():

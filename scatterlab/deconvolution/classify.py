@@ -53,7 +53,20 @@ def classification_errors(estimate, truth, *, metal_classes=(1,), mask=None) -> 
 def classify_dolp(dolp, priors) -> np.ndarray:
     """Label each pixel with the prior of largest density at its DOLP (argmax_k ln Pi_k(P)): the DOLP
     thresholding of the no-turbulence and degraded images in Ch. V, whose thresholds are the DOLPs of equal
-    prior probability (0.30 for the Ch. V priors). ``dolp`` any shape; returns int labels (index into priors)."""
+    prior probability (0.30 for the Ch. V priors).
+
+    Parameters
+    ----------
+    dolp : array_like, any shape
+        Degree of linear polarization per pixel, in [0, 1].
+    priors : sequence of SuperGaussianPrior
+        The DOLP priors (at least one).
+
+    Returns
+    -------
+    ndarray of int, shape of ``dolp``
+        Index into ``priors`` of the prior with the largest density at each pixel.
+    """
     P = np.asarray(dolp, float)
     if not priors:
         raise ValueError("priors must list at least one SuperGaussianPrior")

@@ -826,7 +826,24 @@ def _aop_mstep(B, th):
 
 
 def object_grid(data_shape, psf_radius=None, boundary: str = "reeves", pad=None) -> tuple:
-    """Shape (Hp, Wp) of the object grid :func:`blind_deconvolve` uses for ``data_shape`` (H, W)."""
+    """Shape (Hp, Wp) of the object grid :func:`blind_deconvolve` uses for ``data_shape`` (H, W).
+
+    Parameters
+    ----------
+    data_shape : tuple of int
+        Shape ``(H, W)`` of the data frames [pixels].
+    psf_radius : float, optional
+        PSF support radius [pixels]; default ``min(H, W) / 4``.
+    boundary : str
+        ``"reeves"`` (padded object grid) or any other boundary (object grid = data grid).
+    pad : int, optional
+        Padding on each side [pixels] for ``"reeves"``; default ``ceil(psf_radius)``.
+
+    Returns
+    -------
+    tuple of int
+        ``(Hp, Wp)``: ``(H + 2 pad, W + 2 pad)`` for ``"reeves"``, else ``(H, W)``.
+    """
     H, W = data_shape
     if psf_radius is None:
         psf_radius = min(H, W) / 4

@@ -19,7 +19,24 @@ def initial_psf(pupil, shape, d_over_r0: float = 10.0, rng=None) -> np.ndarray:
     """The initial PSF of Sec. 5.3.2: the PSF of one random Kolmogorov phase screen (D/r0 = 10 by default)
     over ``pupil`` (n, n), piston and tilt removed, centred on the object grid ``shape`` (Hp, Wp), unit sum.
     A start as wide as the turbulence lets the multiplicative EM PSF update grow where the diffraction-limited
-    PSF is nearly zero."""
+    PSF is nearly zero.
+
+    Parameters
+    ----------
+    pupil : array_like, shape (n, n)
+        Pupil amplitude on a square grid (nonzero inside the aperture).
+    shape : tuple of int
+        Object grid shape ``(Hp, Wp)`` [pixels].
+    d_over_r0 : float
+        Aperture diameter over Fried parameter, ``D / r0`` (> 0).
+    rng : None, int or numpy.random.Generator, optional
+        Seed or generator for the phase screen.
+
+    Returns
+    -------
+    ndarray, shape (Hp, Wp)
+        Centred PSF with unit sum.
+    """
     from scatterlab.imaging import phase_screen, psf, remove_piston_tilt
 
     A = np.asarray(pupil, float)
@@ -36,7 +53,20 @@ def initial_psf(pupil, shape, d_over_r0: float = 10.0, rng=None) -> np.ndarray:
 
 
 def resample_psf(h, shape) -> np.ndarray:
-    """Centre-crop or zero-pad a centred PSF to ``shape``; unit sum."""
+    """Centre-crop or zero-pad a centred PSF to ``shape``; unit sum.
+
+    Parameters
+    ----------
+    h : ndarray, shape (Hs, Ws)
+        Centred PSF.
+    shape : tuple of int
+        Target shape ``(H, W)`` [pixels].
+
+    Returns
+    -------
+    ndarray, shape (H, W)
+        The cropped or padded PSF, normalised to unit sum.
+    """
     out = np.zeros(shape)
     Hs, Ws = h.shape
     H, W = shape

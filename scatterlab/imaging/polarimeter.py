@@ -44,7 +44,18 @@ ANGLES_0_60_120 = np.radians([0.0, 60.0, 120.0])
 
 
 def analyzer_matrix(angles) -> np.ndarray:
-    """Rows ``0.5 (1, cos 2a, sin 2a)`` for polarizer angles ``a`` [rad], shape ``(K, 3)``."""
+    """Rows ``0.5 (1, cos 2a, sin 2a)`` for polarizer angles ``a`` [rad], shape ``(K, 3)``.
+
+    Parameters
+    ----------
+    angles : array_like, shape (K,)
+        Polarizer angles [rad] (flattened); at least three distinct orientations mod pi.
+
+    Returns
+    -------
+    ndarray, shape (K, 3)
+        Analyzer rows ``0.5 (1, cos 2a, sin 2a)``.
+    """
     a = as_finite(angles, "angles").ravel()
     P = 0.5 * np.stack([np.ones_like(a), np.cos(2 * a), np.sin(2 * a)], axis=1)
     if np.linalg.matrix_rank(P) < 3:
@@ -55,7 +66,21 @@ def analyzer_matrix(angles) -> np.ndarray:
 
 
 def convolve(images, psfs) -> np.ndarray:
-    """Circular convolution of images ``(..., H, W)`` with centred, unit-sum PSFs of the same size (FFT)."""
+    """Circular convolution of images ``(..., H, W)`` with centred, unit-sum PSFs of the same size
+    (FFT).
+
+    Parameters
+    ----------
+    images : array_like, shape (..., H, W)
+        Images.
+    psfs : array_like, shape (..., H, W)
+        Centred, unit-sum PSFs, broadcast against ``images``.
+
+    Returns
+    -------
+    ndarray, shape (..., H, W)
+        The convolved images.
+    """
     images = np.asarray(images, float)
     psfs = np.asarray(psfs, float)
     if psfs.shape[-2:] != images.shape[-2:]:

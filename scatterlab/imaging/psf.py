@@ -35,7 +35,22 @@ __all__ = [
 
 def circular_pupil(n: int, radius: float, obscuration: float = 0.0) -> np.ndarray:
     """Binary circular pupil of ``radius`` pixels centred on an ``(n, n)`` grid, optional central obscuration
-    (fraction of the radius in [0, 1))."""
+    (fraction of the radius in [0, 1)).
+
+    Parameters
+    ----------
+    n : int
+        Grid size [pixels], >= 4.
+    radius : float
+        Pupil radius [pixels], <= ``n / 2``.
+    obscuration : float
+        Central obscuration radius as a fraction of ``radius``, in [0, 1).
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        1 inside the pupil, 0 outside.
+    """
     if not (isinstance(n, (int, np.integer)) and n >= 4):
         raise ValueError("n must be an integer >= 4")
     radius = float(as_positive(radius, "radius"))
@@ -79,7 +94,18 @@ def psf(pupil, phase=None, pad: int = 2) -> np.ndarray:
 
 
 def otf(h) -> np.ndarray:
-    """Optical transfer function of a centred PSF, normalised to 1 at zero frequency (centred)."""
+    """Optical transfer function of a centred PSF, normalised to 1 at zero frequency (centred).
+
+    Parameters
+    ----------
+    h : array_like, shape (..., n, n)
+        Centred PSF(s).
+
+    Returns
+    -------
+    ndarray, shape (..., n, n), complex
+        Centred OTF, 1 at zero frequency.
+    """
     h = np.asarray(h, float)
     O = np.fft.fftshift(np.fft.fft2(np.fft.ifftshift(h, axes=(-2, -1))), axes=(-2, -1))
     c = h.shape[-1] // 2
@@ -87,12 +113,38 @@ def otf(h) -> np.ndarray:
 
 
 def mtf(h) -> np.ndarray:
-    """Modulation transfer function ``|OTF|`` (centred)."""
+    """Modulation transfer function ``|OTF|`` (centred).
+
+    Parameters
+    ----------
+    h : array_like, shape (..., n, n)
+        Centred PSF(s).
+
+    Returns
+    -------
+    ndarray, shape (..., n, n)
+        Centred MTF, 1 at zero frequency.
+    """
     return np.abs(otf(h))
 
 
 def radial_profile(image, nbins=None) -> tuple[np.ndarray, np.ndarray]:
-    """Azimuthal mean of a centred image: (radius [px], mean) at integer radii."""
+    """Azimuthal mean of a centred image: (radius [px], mean) at integer radii.
+
+    Parameters
+    ----------
+    image : array_like, shape (n, n)
+        Centred image (centre at pixel ``n // 2``).
+    nbins : int, optional
+        Number of integer radii; default ``n // 2``.
+
+    Returns
+    -------
+    radius : ndarray, shape (nbins,)
+        Radii ``0, 1, ..., nbins - 1`` [pixels].
+    mean : ndarray, shape (nbins,)
+        Mean of the image over the pixels at each rounded radius (0 where there are none).
+    """
     image = np.asarray(image, float)
     n = image.shape[-1]
     y, x = np.indices(image.shape[-2:]) - n // 2
@@ -106,27 +158,79 @@ def radial_profile(image, nbins=None) -> tuple[np.ndarray, np.ndarray]:
 
 
 def airy_pattern(v) -> np.ndarray:
-    """Airy intensity ``[2 J1(v)/v]^2`` at ``v = pi D theta / lambda`` (1 at v = 0; first zero v = 3.8317)."""
+    """Airy intensity ``[2 J1(v)/v]^2`` at ``v = pi D theta / lambda`` (1 at v = 0; first zero v =
+    3.8317).
+
+    Parameters
+    ----------
+    v : array_like
+        Normalised angle ``pi D theta / lambda`` [dimensionless].
+
+    Returns
+    -------
+    ndarray, shape of ``v``
+        Normalised Airy intensity.
+    """
     v = np.asarray(v, float)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(v == 0, 1.0, (2 * special.j1(v) / np.where(v == 0, 1, v)) ** 2)
 
 
 def diffraction_mtf(nu) -> np.ndarray:
-    """Diffraction-limited MTF of a circular pupil at normalised frequency ``nu`` in [0, 1] (0 beyond)."""
+    """Diffraction-limited MTF of a circular pupil at normalised frequency ``nu`` in [0, 1] (0
+    beyond).
+
+    Parameters
+    ----------
+    nu : array_like
+        Spatial frequency normalised by the cutoff ``D / lambda`` (clipped to [0, 1]).
+
+    Returns
+    -------
+    ndarray, shape of ``nu``
+        The MTF, 1 at ``nu = 0`` and 0 at ``nu >= 1``.
+    """
     nu = np.clip(np.asarray(nu, float), 0, 1)
     return 2 / np.pi * (np.arccos(nu) - nu * np.sqrt(1 - nu * nu))
 
 
 def long_exposure_mtf(nu, d_over_r0) -> np.ndarray:
-    """Fried's long-exposure MTF: diffraction-limited MTF times exp(-3.44 (nu D/r0)^(5/3))."""
+    """Fried's long-exposure MTF: diffraction-limited MTF times exp(-3.44 (nu D/r0)^(5/3)).
+
+    Parameters
+    ----------
+    nu : array_like
+        Spatial frequency normalised by the cutoff ``D / lambda``.
+    d_over_r0 : float
+        Aperture diameter over Fried parameter, ``D / r0`` (> 0).
+
+    Returns
+    -------
+    ndarray, shape of ``nu``
+        The long-exposure MTF.
+    """
     d_over_r0 = float(as_positive(d_over_r0, "d_over_r0"))
     nu = np.asarray(nu, float)
     return diffraction_mtf(nu) * np.exp(-3.44 * (nu * d_over_r0) ** (5 / 3))
 
 
 def short_exposure_mtf(nu, d_over_r0, alpha: float = 1.0) -> np.ndarray:
-    """Fried's short-exposure (tilt-removed) MTF; ``alpha = 1`` near field, 0.5 far field."""
+    """Fried's short-exposure (tilt-removed) MTF; ``alpha = 1`` near field, 0.5 far field.
+
+    Parameters
+    ----------
+    nu : array_like
+        Spatial frequency normalised by the cutoff ``D / lambda`` (clipped to [0, 1]).
+    d_over_r0 : float
+        Aperture diameter over Fried parameter, ``D / r0`` (> 0).
+    alpha : float
+        1 in the near field, 0.5 in the far field.
+
+    Returns
+    -------
+    ndarray, shape of ``nu``
+        The short-exposure MTF.
+    """
     d_over_r0 = float(as_positive(d_over_r0, "d_over_r0"))
     nu = np.clip(np.asarray(nu, float), 0, 1)
     return diffraction_mtf(nu) * np.exp(
@@ -140,6 +244,22 @@ def fit_r0(nu, measured_mtf, diameter, *, floor: float = 0.02) -> float:
     Least squares in ``log MTF`` over the frequencies from 0 up to where the measured MTF first falls
     below ``floor``: a measured long-exposure MTF has a noise floor (finite averaging of speckle, detector
     noise) that would otherwise dominate the logarithmic residuals.
+
+    Parameters
+    ----------
+    nu : array_like, shape (N,)
+        Spatial frequencies normalised by the cutoff ``D / lambda``.
+    measured_mtf : array_like, shape (N,)
+        Measured MTF at ``nu``.
+    diameter : float
+        Aperture diameter ``D`` [m].
+    floor : float
+        Noise floor of the measured MTF: the fit stops where it is first reached.
+
+    Returns
+    -------
+    float
+        Fried parameter r0 [m].
     """
     nu = as_finite(nu, "nu")
     m = as_finite(measured_mtf, "measured_mtf")

@@ -51,13 +51,44 @@ __all__ = [
 
 
 def kolmogorov_psd(kappa, cn2):
-    """Kolmogorov refractive-index spectrum (Eq. 70) [m^3] at spatial frequency ``kappa`` [rad/m]."""
+    """Kolmogorov refractive-index spectrum (Eq. 70) [m^3] at spatial frequency ``kappa`` [rad/m].
+
+    Parameters
+    ----------
+    kappa : array_like
+        Spatial frequency [rad/m], > 0.
+    cn2 : float
+        Refractive-index structure constant C_n^2 [m^(-2/3)], >= 0.
+
+    Returns
+    -------
+    ndarray, shape of ``kappa``
+        ``0.033 C_n^2 kappa^(-11/3)`` [m^3].
+    """
     kappa = as_positive(kappa, "kappa")
     return 0.033 * float(as_positive(cn2, "cn2", allow_zero=True)) * kappa ** (-11 / 3)
 
 
 def von_karman_psd(kappa, cn2, L0=np.inf, l0=0.0):
-    """Modified von Karman refractive-index spectrum [m^3] with outer scale ``L0`` and inner scale ``l0`` [m]."""
+    """Modified von Karman refractive-index spectrum [m^3] with outer scale ``L0`` and inner scale
+    ``l0`` [m].
+
+    Parameters
+    ----------
+    kappa : array_like
+        Spatial frequency [rad/m], >= 0.
+    cn2 : float
+        Refractive-index structure constant C_n^2 [m^(-2/3)].
+    L0 : float
+        Outer scale [m] (``inf``: none).
+    l0 : float
+        Inner scale [m] (0: none).
+
+    Returns
+    -------
+    ndarray, shape of ``kappa``
+        The spectrum [m^3].
+    """
     kappa = as_positive(kappa, "kappa", allow_zero=True)
     k0 = 0.0 if np.isinf(L0) else 2 * np.pi / float(as_positive(L0, "L0"))
     km = np.inf if l0 == 0 else 5.92 / float(as_positive(l0, "l0"))
@@ -81,6 +112,22 @@ def phase_psd(f, r0, L0=np.inf, l0=0.0):
     """Phase spectrum [rad^2 m^2] at ``f`` [cycles/m]: 0.0229 r0^(-5/3) (f^2 + 1/L0^2)^(-11/6) exp(-(f/fm)^2).
 
     The constant is :data:`PSD_CONSTANT` = 0.022896 (Eq. 79's 0.0229), exact for D(r) = 6.8839 (r/r0)^(5/3).
+
+    Parameters
+    ----------
+    f : array_like
+        Spatial frequency [cycles/m].
+    r0 : float
+        Fried parameter [m].
+    L0 : float
+        Outer scale [m] (``inf``: none).
+    l0 : float
+        Inner scale [m] (0: none).
+
+    Returns
+    -------
+    ndarray, shape of ``f``
+        Phase power spectral density [rad^2 m^2].
     """
     f = np.asarray(f, float)
     f0 = 0.0 if np.isinf(L0) else 1.0 / L0
@@ -101,8 +148,15 @@ def fried_parameter(cn2, path_length, wavelength):
     ----------
     cn2 : float or callable
         Constant C_n^2 [m^(-2/3)], or a profile ``cn2(z)`` integrated over ``[0, path_length]``.
-    path_length : float [m]
-    wavelength : float [m]
+    path_length : float
+        Propagation path length [m].
+    wavelength : float
+        Wavelength [m].
+
+    Returns
+    -------
+    float
+        Fried parameter r0 [m].
     """
     L = float(as_positive(path_length, "path_length"))
     lam = float(as_positive(wavelength, "wavelength"))
@@ -125,7 +179,22 @@ def _weak_check(s2):
 
 
 def rytov_variance(cn2, path_length, wavelength):
-    """Plane-wave Rytov variance (Eq. 80); warns when >= 0.2 (strong turbulence)."""
+    """Plane-wave Rytov variance (Eq. 80); warns when >= 0.2 (strong turbulence).
+
+    Parameters
+    ----------
+    cn2 : float or callable
+        Constant C_n^2 [m^(-2/3)], or a profile ``cn2(z)`` [m^(-2/3)] of the distance ``z`` [m].
+    path_length : float
+        Propagation path length [m].
+    wavelength : float
+        Wavelength [m].
+
+    Returns
+    -------
+    float
+        Rytov variance [dimensionless].
+    """
     L = float(as_positive(path_length, "path_length"))
     k = 2 * np.pi / float(as_positive(wavelength, "wavelength"))
     if callable(cn2):
@@ -136,7 +205,22 @@ def rytov_variance(cn2, path_length, wavelength):
 
 
 def rytov_variance_from_r0(r0, path_length, wavelength):
-    """Eq. 81: 2.91 [L / (k r0^2)]^(5/6) for constant C_n^2; warns when >= 0.2."""
+    """Eq. 81: 2.91 [L / (k r0^2)]^(5/6) for constant C_n^2; warns when >= 0.2.
+
+    Parameters
+    ----------
+    r0 : float
+        Fried parameter [m].
+    path_length : float
+        Propagation path length [m].
+    wavelength : float
+        Wavelength [m].
+
+    Returns
+    -------
+    float
+        Rytov variance [dimensionless].
+    """
     r0 = float(as_positive(r0, "r0"))
     L = float(as_positive(path_length, "path_length"))
     k = 2 * np.pi / float(as_positive(wavelength, "wavelength"))
@@ -343,7 +427,20 @@ class SlidingScreen:
 
 
 def remove_piston_tilt(phase, mask=None) -> np.ndarray:
-    """Subtract the least-squares piston and tilt over ``mask`` (default: the whole screen) [rad]."""
+    """Subtract the least-squares piston and tilt over ``mask`` (default: the whole screen) [rad].
+
+    Parameters
+    ----------
+    phase : array_like, shape (..., ny, nx)
+        Phase screen(s) [rad].
+    mask : array_like of bool, shape (ny, nx), optional
+        Pixels where the fit is made (default: all).
+
+    Returns
+    -------
+    ndarray, shape (..., ny, nx)
+        Phase with piston and tilt removed [rad]; 0 outside ``mask``.
+    """
     phase = np.asarray(phase, float)
     ny, nx = phase.shape[-2:]
     y, x = np.mgrid[0:ny, 0:nx]
@@ -386,6 +483,22 @@ def structure_function_theory(r, r0, L0=np.inf, l0=0.0) -> np.ndarray:
     """Phase structure function from the spectrum by quadrature: D(r) = 4 pi int Phi(f) (1 - J0(2 pi f r)) f df.
 
     Independent of the screen generator; for ``L0 = inf, l0 = 0`` it equals 6.88 (r/r0)^(5/3).
+
+    Parameters
+    ----------
+    r : array_like
+        Separations [m].
+    r0 : float
+        Fried parameter [m].
+    L0 : float
+        Outer scale [m] (``inf``: none).
+    l0 : float
+        Inner scale [m] (0: none).
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        D(r) [rad^2] at the ``N`` separations (``r`` flattened to at least 1-D).
     """
     r = np.atleast_1d(np.asarray(r, float))
     out = np.empty(r.shape)
@@ -413,7 +526,23 @@ def structure_function_theory(r, r0, L0=np.inf, l0=0.0) -> np.ndarray:
 
 
 def phase_variance_theory(r0, L0, l0=0.0) -> float:
-    """Total phase variance [rad^2] of von Karman turbulence: 2 pi int Phi(f) f df (finite for finite L0)."""
+    """Total phase variance [rad^2] of von Karman turbulence: 2 pi int Phi(f) f df (finite for
+    finite L0).
+
+    Parameters
+    ----------
+    r0 : float
+        Fried parameter [m].
+    L0 : float
+        Outer scale [m], finite.
+    l0 : float
+        Inner scale [m] (0: none).
+
+    Returns
+    -------
+    float
+        Phase variance [rad^2].
+    """
     if np.isinf(L0):
         raise ValueError("the phase variance of Kolmogorov turbulence (L0 = inf) is infinite")
     return (

@@ -222,7 +222,18 @@ def write_examples(out="data/examples", *, overwrite: bool = False) -> list[Path
 
 
 def main(argv=None) -> int:
-    """``python -m scatterlab.io.examples [OUT] [--force]``."""
+    """``python -m scatterlab.io.examples [OUT] [--force]``.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Command-line arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success, 2 when a file exists and ``--force`` is not given.
+    """
     parser = argparse.ArgumentParser(
         prog="python -m scatterlab.io.examples", description=__doc__.split("\n")[0]
     )

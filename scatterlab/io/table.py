@@ -72,12 +72,38 @@ def _unit(name: str, allowed: dict, what: str) -> str:
 
 
 def angle_factor(unit: str, what: str = "angle_unit") -> float:
-    """Radians per ``unit`` (``"deg"`` or ``"rad"``)."""
+    """Radians per ``unit`` (``"deg"`` or ``"rad"``).
+
+    Parameters
+    ----------
+    unit : str
+        ``"deg"`` or ``"rad"`` (or an accepted alias).
+    what : str
+        Name of the setting, for the error message.
+
+    Returns
+    -------
+    float
+        Radians per ``unit`` [rad].
+    """
     return ANGLE_UNITS[_unit(unit, ANGLE_UNITS, what)]
 
 
 def length_factor(unit: str, what: str = "wavelength_unit") -> float:
-    """Metres per ``unit`` (``"m"``, ``"mm"``, ``"um"``, ``"nm"``)."""
+    """Metres per ``unit`` (``"m"``, ``"mm"``, ``"um"``, ``"nm"``).
+
+    Parameters
+    ----------
+    unit : str
+        ``"m"``, ``"mm"``, ``"um"`` or ``"nm"`` (or an accepted alias).
+    what : str
+        Name of the setting, for the error message.
+
+    Returns
+    -------
+    float
+        Metres per ``unit`` [m].
+    """
     return LENGTH_UNITS[_unit(unit, LENGTH_UNITS, what)]
 
 
@@ -88,6 +114,16 @@ def time_convention_flip(convention: str) -> bool:
     ``"exp(+jwt)"`` (= ``"exp(+iwt)"``, engineering and ellipsometry, the reference text) needs no
     change; ``"exp(-iwt)"`` (= ``"exp(-jwt)"``, physics, NIST SCATMECH) conjugates every Jones
     matrix, which flips the sign of S3 and so of the circular elements.
+
+    Parameters
+    ----------
+    convention : str
+        Time convention of the file, e.g. ``"exp(+jwt)"`` or ``"exp(-iwt)"``.
+
+    Returns
+    -------
+    bool
+        True when the circular elements must change sign.
     """
     key = str(convention).replace(" ", "").replace("omega", "w").replace("ω", "w").lower()
     if key not in TIME_CONVENTIONS:
@@ -98,7 +134,13 @@ def time_convention_flip(convention: str) -> bool:
 
 
 def circular_sign() -> np.ndarray:
-    """``(4, 4)`` signs that flip the circular elements: ``C M C``, ``C = diag(1, 1, 1, -1)``."""
+    """``(4, 4)`` signs that flip the circular elements: ``C M C``, ``C = diag(1, 1, 1, -1)``.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+        ``outer(c, c)`` with ``c = (1, 1, 1, -1)``.
+    """
     c = np.array([1.0, 1, 1, -1])
     return np.outer(c, c)
 
@@ -106,7 +148,20 @@ def circular_sign() -> np.ndarray:
 def normalise_name(name: str) -> tuple[str, str | None]:
     """``(key, unit)``: lower case without spaces and underscores, and a unit given in brackets or
     as the last underscore-separated word (``"lambda [nm]"`` -> ``("lambda", "nm")``,
-    ``"theta_i_deg"`` -> ``("thetai", "deg")``)."""
+    ``"theta_i_deg"`` -> ``("thetai", "deg")``).
+
+    Parameters
+    ----------
+    name : str
+        Column name as written in the header.
+
+    Returns
+    -------
+    key : str
+        Normalised name.
+    unit : str or None
+        Unit, or None when the name gives none.
+    """
     s = name.strip().lower()
     unit = None
     m = re.match(r"^(.*?)\s*[\[(]\s*([^\])]+?)\s*[\])]\s*$", s)
@@ -132,9 +187,18 @@ _STD_SUFFIX = ("std", "sd", "err")
 def parse_element(key: str):
     """Parse a normalised column key as a Mueller element.
 
-    Returns ------- None, or ``(digits, normalised, is_std)`` with ``digits`` the two index digits
-    as written (base not yet known), ``normalised`` True for ``mjk/m11``, ``is_std`` True for a
-    standard-deviation column.
+    Parameters
+    ----------
+    key : str
+        Normalised column key (from :func:`normalise_name`).
+
+    Returns
+    -------
+    tuple or None
+        None when ``key`` is not a Mueller element, else ``(digits, normalised, is_std)``:
+        ``digits`` ``(j, k, d)`` the index digits as written (base not yet known; ``d`` the digit of
+        the normalising element or None), ``normalised`` True for ``mjk/m11``, ``is_std`` True for a
+        standard-deviation column.
     """
     is_std = False
     for p in _STD_PREFIX:
@@ -164,16 +228,43 @@ def element_name(
 ) -> str:
     """1-based column name of element ``(j, k)`` (0-based indices): ``m12``, ``f_r12/f_r11``,
     ``std_m12``.
+
+    Parameters
+    ----------
+    j, k : int
+        0-based row and column of the element.
+    prefix : str
+        Name prefix, e.g. ``"m"`` or ``"f_r"``.
+    normalised : bool
+        Append ``/<prefix>11``.
+    std : bool
+        Prepend ``std_`` (standard-deviation column).
+
+    Returns
+    -------
+    str
+        The column name.
     """
     name = f"{prefix}{j + 1}{k + 1}" + (f"/{prefix}11" if normalised else "")
     return f"std_{name}" if std else name
 
 
 def element_columns(table, default_base: int | None = None):
-    """Mueller element columns of ``table``: two dicts mapping 0-based ``(j, k)`` to ``(column
-    index, normalised)``, for the values and for their standard deviations (names: module
-    docstring). ``default_base`` (0 or 1) is used when the digits do not tell (no 0 and no 4 index);
-    None refuses."""
+    """Mueller element columns of ``table`` (names: module docstring).
+
+    Parameters
+    ----------
+    table : Table
+        A table from :func:`read_table`.
+    default_base : {0, 1, None}
+        Index base used when the digits do not tell (no 0 and no 4 index); None refuses.
+
+    Returns
+    -------
+    values, stds : dict
+        Map 0-based ``(j, k)`` to ``(column index, normalised)``, for the values and for their
+        standard deviations.
+    """
     prefix_err = table.path
     parsed = {}
     for i, key in enumerate(table.keys):
@@ -355,6 +446,16 @@ def _split(line: str, delimiter):
 def read_table(path) -> Table:
     """Read a delimited table (module docstring); every cell must be a finite number.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The table file.
+
+    Returns
+    -------
+    Table
+        Header names, normalised keys, units, values ``(rows, columns)`` and comments.
+
     Raises
     ------
     ValueError
@@ -420,7 +521,22 @@ def read_table(path) -> Table:
 def format_table(names, values, comments=()) -> str:
     """CSV text: ``# comment`` lines, a header of ``names`` and one row per line of ``values``
     ``(rows, columns)``, 15 significant digits (unit conversions then read back as written: 30, not
-    29.999999999999996; the values to ~1e-15 relative)."""
+    29.999999999999996; the values to ~1e-15 relative).
+
+    Parameters
+    ----------
+    names : sequence of str
+        Column names.
+    values : array_like, shape (rows, columns)
+        The numbers.
+    comments : sequence of str
+        Comment lines written first.
+
+    Returns
+    -------
+    str
+        The CSV text, ending with a newline.
+    """
     out = [f"# {c}" for c in comments]
     out.append(",".join(names))
     out.extend(",".join(f"{float(v):.15g}" for v in row) for row in np.asarray(values, float))

@@ -86,7 +86,21 @@ class Contour:
 
 def contour(x, y, closed: bool = False) -> Contour:
     """Pulses centred at the points: an open profile (x increasing, conductor below) or a closed body
-    (counter-clockwise points). Lengths and tangents from central differences (periodic when closed)."""
+    (counter-clockwise points). Lengths and tangents from central differences (periodic when
+    closed).
+
+    Parameters
+    ----------
+    x, y : array_like, shape (N,)
+        Pulse centres [m], N >= 4 (x increasing for an open profile, counter-clockwise when closed).
+    closed : bool
+        Closed body instead of an open profile.
+
+    Returns
+    -------
+    Contour
+        Points, pulse lengths ``ds`` [m], unit tangents and normals, each of shape (N,).
+    """
     x = as_finite(x, "x").astype(float).ravel()
     y = as_finite(y, "y").astype(float).ravel()
     if x.shape != y.shape or x.size < 4:
@@ -118,7 +132,21 @@ def contour(x, y, closed: bool = False) -> Contour:
 
 
 def self_term_small_argument(k, ds):
-    """The textbook diagonal element (small-argument expansion of H0^(2)); kept to test the exact one against."""
+    """The textbook diagonal element (small-argument expansion of H0^(2)); kept to test the exact
+    one against.
+
+    Parameters
+    ----------
+    k : float
+        Wavenumber [rad/m].
+    ds : array_like
+        Pulse lengths [m].
+
+    Returns
+    -------
+    ndarray, shape of ``ds``, complex
+        Diagonal elements of the MoM matrix [m].
+    """
     return -0.25j * ds * (1 - 2j / np.pi * np.log(EULER_GAMMA * k * ds / (4 * np.e)))
 
 
@@ -194,7 +222,20 @@ def _fill_block(A, c, k, start, stop):
 
 
 def impedance_matrix(c: Contour, k: float) -> np.ndarray:
-    """The N x N MoM matrix A (module docstring), complex128."""
+    """The N x N MoM matrix A (module docstring), complex128.
+
+    Parameters
+    ----------
+    c : Contour
+        The discretised contour (N pulses).
+    k : float
+        Wavenumber [rad/m].
+
+    Returns
+    -------
+    ndarray, shape (N, N), complex
+        The matrix A.
+    """
     N = c.size
     A = np.empty((N, N), complex)
     # one triangle of kR (symmetric), in row blocks to bound the temporaries
@@ -290,7 +331,22 @@ def _pair_elements(c, k, m, n, off, band):
 
 
 def physical_optics_current(c: Contour, incidence, k: float) -> np.ndarray:
-    """Kirchhoff current U = 2 d(psi_inc)/dn (lit side; zero where the incident wave grazes away)."""
+    """Kirchhoff current U = 2 d(psi_inc)/dn (lit side; zero where the incident wave grazes away).
+
+    Parameters
+    ----------
+    c : Contour
+        The discretised contour (N pulses).
+    incidence : incident wave
+        Object with ``normal_derivative(x, y, nx, ny, k)`` (and optionally ``direction()``).
+    k : float
+        Wavenumber [rad/m].
+
+    Returns
+    -------
+    ndarray, shape (N,), complex
+        The current U at the pulse centres.
+    """
     U = 2 * incidence.normal_derivative(c.x, c.y, c.nx, c.ny, k)
     if hasattr(incidence, "direction"):
         d = incidence.direction()
@@ -429,7 +485,23 @@ def _angles(theta, name, limit=np.pi):
 
 def check_sampling(c: Contour, wavelength: float, min_ppw: float, where: str = "") -> None:
     """Raise ValueError below ``min_ppw`` points per ``wavelength`` (longest pulse); warn below 8 (median).
-    ``where`` names the medium in the messages."""
+    ``where`` names the medium in the messages.
+
+    Parameters
+    ----------
+    c : Contour
+        The discretised contour.
+    wavelength : float
+        Wavelength in the medium [m].
+    min_ppw : float
+        Minimum number of points per wavelength.
+    where : str
+        Name of the medium, for the messages.
+
+    Returns
+    -------
+    None
+    """
     import warnings
 
     where = f" {where}" if where else ""
@@ -449,7 +521,21 @@ def check_sampling(c: Contour, wavelength: float, min_ppw: float, where: str = "
 
 
 def check_incidences(incs, c: Contour, k: float) -> None:
-    """Validate each incidence against the contour (taper width and position, angle from above)."""
+    """Validate each incidence against the contour (taper width and position, angle from above).
+
+    Parameters
+    ----------
+    incs : sequence of incident waves
+        The incidences; those with a ``check(k, length, extent)`` method are checked.
+    c : Contour
+        The discretised contour.
+    k : float
+        Wavenumber [rad/m].
+
+    Returns
+    -------
+    None
+    """
     length = (c.x[-1] - c.x[0]) * c.size / (c.size - 1) if not c.closed else None  # N pulses of dx
     extent = None if c.closed else (c.x[0], c.x[-1], c.size)
     for inc in incs:

@@ -52,6 +52,24 @@ def cylinder_coefficients(ka, polarization: str = "s", eta=None):
 
     The total field on the surface is :math:`\\sum_n j^{-n}c_ne^{jn\\phi}`, :math:`c_n = J_n(x) - a_nH_n(x)`
     (zero for the s-pol PEC); inside, :math:`\\psi_2 = \\sum_n j^{-n}c_n\\,J_n(mk\\rho)/J_n(mka)\\,e^{jn\\phi}`.
+
+    Parameters
+    ----------
+    ka : float
+        Electrical radius ``k a`` [dimensionless].
+    polarization : {"s", "p"}
+        ``"s"`` (E_z) or ``"p"`` (H_z).
+    eta : complex, optional
+        Refractive index of the cylinder; None is the perfect conductor.
+
+    Returns
+    -------
+    n : ndarray of int, shape (2N+1,)
+        Orders ``-N ... N``.
+    a : ndarray, shape (2N+1,), complex
+        Scattering coefficients a_n.
+    c : ndarray, shape (2N+1,), complex
+        Surface-field coefficients c_n.
     """
     ka, eta = _checked(ka, polarization, eta)
     n = _orders(ka, eta)
@@ -75,6 +93,24 @@ def cylinder_echo_width(
     """sigma_2D(phi) [m] for a cylinder of electrical radius ``ka``; ``phi`` [rad] from forward.
 
     ``eta=None`` is the perfect conductor; ``polarization`` "s" (E_z) or "p" (H_z).
+
+    Parameters
+    ----------
+    ka : float
+        Electrical radius ``k a`` [dimensionless].
+    phi : array_like
+        Scattering angle from the forward direction [rad].
+    wavelength : float
+        Wavelength [m].
+    polarization : {"s", "p"}
+        ``"s"`` (E_z) or ``"p"`` (H_z).
+    eta : complex, optional
+        Refractive index of the cylinder; None is the perfect conductor.
+
+    Returns
+    -------
+    ndarray, shape of ``phi``
+        Echo width sigma_2D [m].
     """
     wavelength = float(as_positive(wavelength, "wavelength"))
     n, a, _ = cylinder_coefficients(ka, polarization, eta)
@@ -85,7 +121,23 @@ def cylinder_echo_width(
 
 
 def cylinder_surface_field(ka, phi, wavelength: float = 1.0) -> np.ndarray:
-    """Exact U = d psi / d rho on a PEC cylinder's surface (s-pol) at angles ``phi`` (checks the MoM current)."""
+    """Exact U = d psi / d rho on a PEC cylinder's surface (s-pol) at angles ``phi`` (checks the MoM
+    current).
+
+    Parameters
+    ----------
+    ka : float
+        Electrical radius ``k a`` [dimensionless].
+    phi : array_like
+        Angles on the surface [rad].
+    wavelength : float
+        Wavelength [m].
+
+    Returns
+    -------
+    ndarray, shape of ``phi``, complex
+        U = d psi / d rho [1/m] for a unit-amplitude incident plane wave.
+    """
     ka = float(as_positive(ka, "ka"))
     k = 2 * np.pi / wavelength
     n = _orders(ka)

@@ -95,7 +95,18 @@ class FastOptions:
 
 
 def uniform_step(c: Contour) -> float:
-    """The grid step dx [m] of an open profile on a uniform x grid; ValueError otherwise."""
+    """The grid step dx [m] of an open profile on a uniform x grid; ValueError otherwise.
+
+    Parameters
+    ----------
+    c : Contour
+        An open profile.
+
+    Returns
+    -------
+    float
+        Grid step dx [m].
+    """
     if c.closed:
         raise ValueError("the fast path needs an open profile (closed=False)")
     d = np.diff(c.x)

@@ -51,7 +51,20 @@ _DECAYED = (
 
 def hankel2(order: int, z):
     """H_order^(2)(z), order 0 or 1, for real or complex z (Im z <= 0); 0 where Im z < -40 (decayed
-    by e^-40)."""
+    by e^-40).
+
+    Parameters
+    ----------
+    order : {0, 1}
+        Order of the Hankel function.
+    z : array_like
+        Argument, real or complex with ``Im z <= 0``.
+
+    Returns
+    -------
+    ndarray, shape of ``z``, complex
+        H_order^(2)(z).
+    """
     z = np.asarray(z)
     if not np.iscomplexobj(z):
         if order == 0:
@@ -68,7 +81,18 @@ def hankel2(order: int, z):
 def arclength_contour(c):
     """A copy of the contour whose pulse lengths are arcs, not chords: the central-difference chord
     c2 = |r_(n+1) - r_(n-1)| spans an arc c2 (1 + kappa^2 c2^2 / 24) (exact to O(kappa^4 c2^4) on a
-    circle)."""
+    circle).
+
+    Parameters
+    ----------
+    c : Contour
+        The discretised contour.
+
+    Returns
+    -------
+    Contour
+        Copy of ``c`` with arc pulse lengths ``ds`` [m].
+    """
     import dataclasses
 
     kx, ky = curvature(c)
@@ -77,7 +101,18 @@ def arclength_contour(c):
 
 def curvature(c):
     """Curvature vector d^2 r / ds^2 (kx, ky) [1/m] at the points of a contour (periodic when
-    closed)."""
+    closed).
+
+    Parameters
+    ----------
+    c : Contour
+        The discretised contour (N points).
+
+    Returns
+    -------
+    kx, ky : ndarray, shape (N,)
+        Components of the curvature vector [1/m].
+    """
     if c.closed:
 
         def d(f):

@@ -54,8 +54,27 @@ class IncoherentResult:
 
 
 def partition_task(task):
-    """Solve one partition for all incidences: returns (coefficient (I, S), far field (S, I), energy (I,),
-    fill and solve seconds, transmitted energy (I,))."""
+    """Solve one partition for all incidences.
+
+    Parameters
+    ----------
+    task : tuple
+        ``(x, y, wavelength, theta_i, g, theta_s, solver, polarization, eta, method)``, as in
+        :func:`incoherent_scattering`, with ``x, y`` (n,) one partition [m].
+
+    Returns
+    -------
+    coefficient : ndarray, shape (I, S)
+        Scattering coefficient [1/rad].
+    far_field : ndarray, shape (S, I), complex
+        Far-field amplitudes.
+    energy : ndarray, shape (I,)
+        Reflected power (coefficient integrated over the scattering angle).
+    fill_seconds, solve_seconds : float
+        Matrix fill and solve times [s].
+    transmitted : ndarray, shape (I,)
+        Transmitted power (NaN where undefined).
+    """
     x, y, wavelength, theta_i, g, theta_s, solver, polarization, eta, method = task
     k = 2 * np.pi / wavelength
     x0 = 0.5 * (x[0] + x[-1])
@@ -77,7 +96,18 @@ def partition_task(task):
 
 
 def surface_digest(x, y) -> str:
-    """SHA-256 of a profile's float64 bytes (identifies a partition in a checkpoint)."""
+    """SHA-256 of a profile's float64 bytes (identifies a partition in a checkpoint).
+
+    Parameters
+    ----------
+    x, y : array_like, shape (N,)
+        Profile points [m].
+
+    Returns
+    -------
+    str
+        Hexadecimal SHA-256 digest.
+    """
     h = hashlib.sha256(np.ascontiguousarray(x, float).tobytes())
     h.update(np.ascontiguousarray(y, float).tobytes())
     return h.hexdigest()
@@ -166,19 +196,33 @@ def incoherent_scattering(
 
     Parameters
     ----------
-    x, y : array (N,) [m] -- one long surface (e.g. from :func:`~scatterlab.mom.rough_surface`).
-    wavelength : float [m]
-    theta_i : array (I,) [rad] -- incidence angles in (-pi/2, pi/2), all solved with one factorisation per
-        partition.
-    theta_s : array (S,) [rad] -- scattering angles in [-pi/2, pi/2] from the vertical, specular at theta_i.
-    partitions : int -- the profile is cut into this many pieces of N // partitions points.
-    g : float [m], optional -- taper width; default a quarter of a partition.
-    solver : "lu" or "fb"
-    executor : a :mod:`scatterlab.runtime` executor (default serial).
-    checkpoint : path, optional -- npz of finished partitions; an existing file is resumed. It records the
-        shared inputs (wavelength, angles, taper, partition size, polarization, eta, method) and a SHA-256
-        digest of each partition's profile; any mismatch raises ValueError instead of reusing old results.
-    polarization, eta, method : as :func:`~scatterlab.mom.solve` ("s"/"p"; None is a perfect conductor).
+    x, y : array_like, shape (N,)
+        One long surface [m] (e.g. from :func:`~scatterlab.mom.rough_surface`).
+    wavelength : float
+        Wavelength [m].
+    theta_i : array_like, shape (I,)
+        Incidence angles in (-pi/2, pi/2) [rad], all solved with one factorisation per partition.
+    theta_s : array_like, shape (S,)
+        Scattering angles in [-pi/2, pi/2] from the vertical [rad], specular at theta_i.
+    partitions : int
+        The profile is cut into this many pieces of ``N // partitions`` points.
+    g : float, optional
+        Taper width [m]; default a quarter of a partition.
+    solver : {"lu", "fb"}
+        Direct LU or forward-backward iteration.
+    executor : Executor, optional
+        A :mod:`scatterlab.runtime` executor (default serial).
+    checkpoint : str or os.PathLike, optional
+        npz of finished partitions; an existing file is resumed. It records the shared inputs
+        (wavelength, angles, taper, partition size, polarization, eta, method) and a SHA-256 digest
+        of each partition's profile; any mismatch raises ValueError instead of reusing old results.
+    polarization, eta, method
+        As :func:`~scatterlab.mom.solve` ("s"/"p"; ``eta=None`` is a perfect conductor).
+
+    Returns
+    -------
+    IncoherentResult
+        Angles and the partition averages, arrays (I, S) [1/rad].
     """
     from scatterlab.runtime import get_executor
 

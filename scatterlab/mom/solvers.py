@@ -19,8 +19,29 @@ __all__ = ["forward_backward"]
 
 
 def forward_backward(A, V, *, tol: float = 1e-6, max_iter: int = 50, block: int = 256):
-    """Solve ``A U = V`` (V: (N,) or (N, K)); returns (U, info) with info keys converged, iterations,
-    updates (relative change of U per iteration), residual (final ||A U - V|| / ||V||), reason."""
+    """Solve ``A U = V`` by block forward-backward iteration.
+
+    Parameters
+    ----------
+    A : ndarray, shape (N, N)
+        System matrix.
+    V : ndarray, shape (N,) or (N, K)
+        Right-hand side(s).
+    tol : float
+        Stop when the relative change of U per iteration is below this.
+    max_iter : int
+        Maximum number of forward-backward sweep pairs.
+    block : int
+        Size of the diagonal blocks solved directly.
+
+    Returns
+    -------
+    U : ndarray, shape of ``V``, complex
+        The solution.
+    info : dict
+        ``converged`` (bool), ``iterations`` (int), ``updates`` (relative change of U per
+        iteration), ``residual`` (final ``||A U - V|| / ||V||``), ``reason`` (str).
+    """
     N = A.shape[0]
     V2 = V if V.ndim == 2 else V[:, None]
     starts = list(range(0, N, block))

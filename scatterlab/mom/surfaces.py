@@ -21,17 +21,60 @@ __all__ = ["rough_surface", "rms_slope", "correlation_length_for_slope", "gaussi
 
 
 def rms_slope(sigma_h, corr_length):
-    """rms slope sqrt(2) sigma_h / l of a Gaussian-correlated surface (the pBRDF's sigma, Eq. 128)."""
+    """rms slope sqrt(2) sigma_h / l of a Gaussian-correlated surface (the pBRDF's sigma, Eq. 128).
+
+    Parameters
+    ----------
+    sigma_h : array_like
+        rms height [m].
+    corr_length : array_like
+        Correlation length [m].
+
+    Returns
+    -------
+    ndarray
+        rms slope [dimensionless].
+    """
     return np.sqrt(2) * np.asarray(sigma_h, float) / np.asarray(corr_length, float)
 
 
 def correlation_length_for_slope(sigma_h, slope):
-    """Correlation length l giving rms slope ``slope`` for rms height ``sigma_h``: l = sqrt(2) sigma_h / slope."""
+    """Correlation length l giving rms slope ``slope`` for rms height ``sigma_h``: l = sqrt(2)
+    sigma_h / slope.
+
+    Parameters
+    ----------
+    sigma_h : array_like
+        rms height [m].
+    slope : array_like
+        rms slope [dimensionless].
+
+    Returns
+    -------
+    ndarray
+        Correlation length l [m].
+    """
     return np.sqrt(2) * np.asarray(sigma_h, float) / np.asarray(slope, float)
 
 
 def gaussian_spectrum(k, sigma_h, corr_length):
-    """Two-sided power spectrum W(k) [m^3] of the Gaussian correlation function; integrates to sigma_h^2."""
+    """Two-sided power spectrum W(k) [m^3] of the Gaussian correlation function; integrates to
+    sigma_h^2.
+
+    Parameters
+    ----------
+    k : array_like
+        Spatial frequency [rad/m].
+    sigma_h : float
+        rms height [m].
+    corr_length : float
+        Correlation length [m].
+
+    Returns
+    -------
+    ndarray, shape of ``k``
+        W(k) [m^3].
+    """
     return sigma_h**2 * corr_length / (2 * np.sqrt(np.pi)) * np.exp(-((k * corr_length) ** 2) / 4)
 
 

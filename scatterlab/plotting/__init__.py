@@ -75,6 +75,28 @@ def pbrdf_lobe_png(
     The surface point in direction ``(theta_r, phi)`` sits at radius ``F00 / max F00``; its colour
     is the DOLP of the scattered light for unpolarized illumination (NaN, pyvista's NaN colour,
     where no light is scattered). Off-screen pyvista rendering; returns the path.
+
+    Parameters
+    ----------
+    model : pBRDF model
+        Object with ``mueller_linear(eta, theta_i, theta_r, phi)`` returning ``(..., 4, 4)``.
+    eta : complex or float
+        Refractive index passed to the model.
+    theta_i : float
+        Incidence angle [rad].
+    path : str or os.PathLike
+        Output PNG file.
+    n_theta, n_phi : int
+        Number of samples in ``theta_r`` (0 to 89.5 deg) and ``phi`` (0 to 2 pi).
+    window_size : tuple of int
+        Image size ``(width, height)`` [pixels].
+    title : str, optional
+        Text drawn in the image.
+
+    Returns
+    -------
+    str or os.PathLike
+        ``path``, as given.
     """
     import pyvista as pv
 

@@ -122,6 +122,11 @@ def linear_retarder_jones(retardance, fast_axis=0.0) -> np.ndarray:
 def rotator_jones(rotation_angle) -> np.ndarray:
     """Jones matrix of a circular retarder (optical rotator) turning the field by ``rotation_angle`` [rad].
 
+    Parameters
+    ----------
+    rotation_angle : array_like
+        Rotation angle [rad].
+
     Returns
     -------
     J : ndarray, shape ``(..., 2, 2)``; equals ``rotation(-rotation_angle)``.
@@ -131,6 +136,11 @@ def rotator_jones(rotation_angle) -> np.ndarray:
 
 def linear_jones_vector(angle) -> np.ndarray:
     """Jones vector ``(cos a, sin a)`` of unit-intensity linear polarization at ``angle`` [rad] from s (Eq. 32).
+
+    Parameters
+    ----------
+    angle : array_like
+        Polarization angle from s towards p [rad].
 
     Returns
     -------
@@ -145,6 +155,16 @@ def circular_jones_vector(handedness: str = "right") -> np.ndarray:
 
     "Right" is the state with Stokes ``S3 = +1`` in this package's convention
     (clockwise rotation seen by an observer facing the source, e^{+jwt}).
+
+    Parameters
+    ----------
+    handedness : {"right", "left"}
+        Handedness of the circular state.
+
+    Returns
+    -------
+    ndarray, shape (2,), complex
+        The unit-intensity Jones vector.
     """
     if handedness not in ("right", "left"):
         raise ValueError("handedness must be 'right' or 'left'")

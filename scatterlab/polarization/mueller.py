@@ -157,7 +157,20 @@ def mueller_from_jones_elements(a, b, c, d, *, shape: tuple[int, int] = (4, 4)) 
 
 
 def apply(M, S) -> np.ndarray:
-    """Stokes vector(s) after Mueller matrix ``M``: ``(..., 4, 4) x (..., 4) -> (..., 4)``."""
+    """Stokes vector(s) after Mueller matrix ``M``: ``(..., 4, 4) x (..., 4) -> (..., 4)``.
+
+    Parameters
+    ----------
+    M : array_like, shape (..., 4, 4)
+        Mueller matrix or matrices.
+    S : array_like, shape (..., 4)
+        Stokes vector(s); broadcast against ``M``.
+
+    Returns
+    -------
+    ndarray, shape (..., 4)
+        ``M @ S``.
+    """
     return np.einsum("...ij,...j->...i", np.asarray(M), np.asarray(S))
 
 
@@ -179,6 +192,11 @@ def rotate_mueller(M, angle) -> np.ndarray:
     ----------
     M : array_like, shape ``(..., 4, 4)``
     angle : array_like [rad], from the s axis towards p.
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+        The rotated Mueller matrix.
     """
     R = _frame_rotation(angle)
     return np.swapaxes(R, -1, -2) @ np.asarray(M) @ R
@@ -189,6 +207,13 @@ def diattenuator(t_max=1.0, t_min=0.0, angle=0.0) -> np.ndarray:
 
     :math:`\tfrac12[[q+r, q-r, 0, 0], [q-r, q+r, 0, 0], [0, 0, 2\sqrt{qr}, 0], [0, 0, 0, 2\sqrt{qr}]]`
     rotated to ``angle`` [rad].
+
+    Parameters
+    ----------
+    t_max, t_min : array_like
+        Intensity transmittances along and across ``angle``, ``0 <= t_min <= t_max <= 1``.
+    angle : array_like
+        Axis of maximum transmittance, from s towards p [rad].
 
     Returns
     -------
@@ -212,6 +237,13 @@ def linear_polarizer(angle=0.0, extinction_ratio=0.0) -> np.ndarray:
     The ideal polarizer is ``0.5 [[1, c, s, 0], [c, c^2, cs, 0], [s, cs, s^2, 0], [0, 0, 0, 0]]``
     with ``c = cos 2a``, ``s = sin 2a``.
 
+    Parameters
+    ----------
+    angle : array_like
+        Transmission axis, from s towards p [rad].
+    extinction_ratio : array_like
+        ``t_min / t_max``, in [0, 1] (0: ideal polarizer).
+
     Returns
     -------
     M : ndarray, shape ``(..., 4, 4)``.
@@ -230,6 +262,13 @@ def linear_retarder(retardance, fast_axis=0.0) -> np.ndarray:
     [0, s sin d, -c sin d, cos d]]`` -- for a quarter-wave plate with vertical (p) fast axis
     this is the matrix of Eq. 39.
 
+    Parameters
+    ----------
+    retardance : array_like
+        Retardance :math:`\delta` [rad].
+    fast_axis : array_like
+        Fast-axis angle :math:`\theta`, from s towards p [rad].
+
     Returns
     -------
     M : ndarray, shape ``(..., 4, 4)``.
@@ -246,7 +285,18 @@ def linear_retarder(retardance, fast_axis=0.0) -> np.ndarray:
 
 
 def rotator(rotation_angle) -> np.ndarray:
-    """Optical rotator turning linear polarization by ``rotation_angle`` [rad] (towards p)."""
+    """Optical rotator turning linear polarization by ``rotation_angle`` [rad] (towards p).
+
+    Parameters
+    ----------
+    rotation_angle : array_like
+        Rotation angle, towards p [rad].
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+        Mueller matrix of the rotator.
+    """
     return _frame_rotation(-as_finite(rotation_angle, "rotation_angle"))
 
 
@@ -256,6 +306,16 @@ def depolarizer(a=0.0) -> np.ndarray:
     ``a = 0`` is the ideal depolarizer. Realizability additionally requires
     ``1 +- a1 +- a2 +- a3 >= 0`` with an even number of minus signs among a's,
     which :func:`is_physical_mueller` checks.
+
+    Parameters
+    ----------
+    a : array_like, scalar or shape (..., 3)
+        Diagonal coefficients ``(a1, a2, a3)`` (a scalar is used for all three), ``|a_k| <= 1``.
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+        ``diag(1, a1, a2, a3)``.
     """
     a = as_finite(a, "a")
     if a.ndim == 0 or a.shape[-1] != 3:
@@ -273,6 +333,16 @@ def coherency_matrix(M) -> np.ndarray:
     ``(..., 4, 4)``, Hermitian.
 
     ``trace(H) = M00``; ``H`` is positive semi-definite iff ``M`` is physically realizable.
+
+    Parameters
+    ----------
+    M : array_like, shape (..., 4, 4)
+        Mueller matrix or matrices.
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4), complex
+        Hermitian coherency matrix ``H``.
     """
     M = as_finite(M, "M")
     if M.shape[-2:] != (4, 4):
@@ -281,7 +351,18 @@ def coherency_matrix(M) -> np.ndarray:
 
 
 def mueller_from_coherency(H) -> np.ndarray:
-    """Inverse of :func:`coherency_matrix`: ``M_ij = Re tr(B_ij^H H)``, shape ``(..., 4, 4)``."""
+    """Inverse of :func:`coherency_matrix`: ``M_ij = Re tr(B_ij^H H)``, shape ``(..., 4, 4)``.
+
+    Parameters
+    ----------
+    H : array_like, shape (..., 4, 4)
+        Coherency matrix or matrices.
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+        Real Mueller matrix.
+    """
     H = np.asarray(H, complex)
     return np.einsum("ijab,...ab->...ij", _BASIS.conj(), H).real
 
