@@ -6,8 +6,15 @@ copper, gold and titanium at 1550 nm, a paint with n in [1.3, 1.7] and kappa in 
 phase screen and noise -- and runs the characterization pipeline on a small version of the default scene
 (64 px, specular 30-60 deg, D/r0 7.9). For the restored no-turbulence image and the corrected turbulent image,
 each region's posterior (paint, metal) says whether its 68 % and 95 % intervals contain the truth. The coverage
-is compared with the nominal rate within two binomial standard errors of N trials. Full mode: 24 seeds, about
-12 minutes on 2 cores; quick mode: 2 seeds (the rates are recorded, not judged).
+is compared with the nominal rate within two binomial standard errors of N trials. Full mode: 24 seeds,
+18 minutes on 2 busy cores (with the bootstrap self-calibration); quick mode: 2 seeds (the rates are recorded,
+not judged).
+
+Last full run (seed 20101210, plate zoom 4, bootstrap self-calibration), 68 % / 95 % coverage: corrected paint
+n 0.71 / 0.96, kappa 0.54 / 0.92, corrected metal n 0.88 / 1.00, kappa 0.67 / 1.00; no-turbulence paint
+1.00 / 1.00 (conservative: the known-PSF bias correction keeps half the bias as error, about twice the
+residual), metal 0.58 / 1.00. Before the bootstrap (re-simulation through the data's own PSF estimate, plate
+zoom 2) the corrected paint's kappa covered 0.08 / 0.67.
 """
 
 import numpy as np
