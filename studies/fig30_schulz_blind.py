@@ -56,7 +56,7 @@ def _rel_rmse(a, b):
 def run(ctx):
     size, its = (48, 150) if ctx.quick else (64, 1000)
     n = size // 2
-    obj = render_stokes(painted_plate(size, rng=ctx.rng))[0]
+    obj = render_stokes(painted_plate(size, rng=ctx.rng))[..., 0]
     obj = obj / obj.sum()
     pupil = circular_pupil(n, n / 2)
     truth_psfs = np.array(
