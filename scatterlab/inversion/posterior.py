@@ -987,7 +987,9 @@ def diagnose(
     tau = np.max(
         [s.get_autocorr_time(tol=0) for s in samplers], axis=0
     )  # (D,), the slowest ensemble
-    tmax = float(np.max(tau))
+    finite = np.isfinite(tau)
+    # a NaN tau (a walker set that never moved) gives no burn-in estimate: discard half and say so
+    tmax = float(np.max(tau[finite])) if finite.any() else float(n_steps)
     burn = int(min(np.ceil(2 * tmax), n_steps // 2))
     thin = max(1, int(tmax // 2))
     kept = len(range(burn + thin - 1, n_steps, thin))
@@ -1000,6 +1002,8 @@ def diagnose(
     rhat = ensemble_rhat(raw_phys, E)
     acceptance = np.array([np.mean(s.acceptance_fraction) for s in samplers])
     reasons = _convergence(n_steps, tmax, acceptance, rhat, options, E)
+    if not finite.all():
+        reasons.append("autocorrelation time undefined (NaN) for some parameter: not converged")
     messages = list(messages) + reasons
     half = chain[chain.shape[0] // 2 :, :, : problem.P]
     modes = _clusters(np.median(half, 0), np.sqrt(np.mean(np.var(half, 0), 0)), rng)
@@ -1144,7 +1148,22 @@ class Posterior:
         return np.quantile(self.samples, q, axis=0)
 
     def interval(self, level: float = 0.68) -> np.ndarray:
-        """Equal-tailed credible interval, (2, 3): lower and upper bounds of n, kappa, sigma."""
+        """Equal-tailed credible interval, (2, 3): lower and upper bounds of n, kappa, sigma.
+
+        These are marginal *credible* intervals, one per parameter. For a fixed truth in a weakly identified
+        problem they are not confidence intervals and can under-cover badly: in ``studies/thilak_tables.py``
+        they contain copper in 0-4 % of trials at 68 %, where truths drawn from the prior are covered at
+        the nominal rate and the likelihood-ratio region covers copper at 67-78 %.
+
+        Parameters
+        ----------
+        level : float
+            Credible level in (0, 1).
+
+        Returns
+        -------
+        ndarray, shape (2, 3)
+        """
         a = (1 - level) / 2
         return self.quantiles([a, 1 - a])
 
@@ -1478,4 +1497,13 @@ def sample_posteriors(
             kk.update(backend=str(Path(backend) / f"problem_{k}.h5"), name="posterior")
         tasks.append((row, int(seeds[k]), (theta_i, theta_r, noise), kk))
     ex = executor if executor is not None else get_executor("serial")
-    return ex.map(_sample_task, tasks, desc="posteriors")
+    posts = ex.map(_sample_task, tasks, desc="posteriors")
+    bad = [p for p in posts if not p.converged]
+    if bad:
+        # each posterior keeps its reasons in ``messages``; one warning says that some exist
+        warnings.warn(
+            f"{len(bad)} of {len(posts)} posteriors not converged (see Posterior.messages)",
+            ConvergenceWarning,
+            stacklevel=2,
+        )
+    return posts
