@@ -258,12 +258,14 @@ def bias_corrected(region: RegionData, bias) -> RegionData:
     Returns
     -------
     RegionData
-        ``mean`` corrected and clipped to [0, 1], ``error`` with :meth:`BiasEstimate.systematic` added in
-        quadrature, ``bias`` the subtracted bias, ``bias_spread`` the bootstrap spread.
+        ``mean`` corrected and clipped to [0, 1]; ``error``, ``statistical`` and ``edge`` scaled by the
+        correction's slope (``1 / ratio`` for a ratio), ``error`` with :meth:`BiasEstimate.systematic` added
+        in quadrature; ``bias`` the subtracted bias, ``bias_spread`` the bootstrap spread.
     """
     if not isinstance(bias, BiasEstimate):
         b = np.asarray(bias, float)
         bias = BiasEstimate(b, np.zeros_like(b), 1)
+    scale = 1.0 if bias.ratio is None else 1.0 / bias.ratio  # d(corrected mean) / d(mean)
     if bias.ratio is not None:
         corrected = region.mean / bias.ratio
         # the same error model on the equivalent difference; the spread scales with the correction
@@ -277,10 +279,13 @@ def bias_corrected(region: RegionData, bias) -> RegionData:
         subtracted = bias.mean
     # a DOLP is in [0, 1]: a corrected mean beyond it keeps the bound (its error still carries the bias)
     mean = np.clip(region.mean - subtracted, 0.0, 1.0)
+    # dividing the mean by a ratio divides its statistical and edge errors by it too
     return replace(
         region,
         mean=mean,
-        error=np.sqrt(region.error**2 + sys_err**2),
+        error=np.sqrt((scale * region.error) ** 2 + sys_err**2),
+        statistical=scale * region.statistical,
+        edge=scale * region.edge,
         bias=subtracted,
         bias_spread=bias.spread,
     )

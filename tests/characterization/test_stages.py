@@ -262,3 +262,19 @@ def test_model_error_widens_the_region_posterior():
 
     with pytest.raises(ValueError, match="model_error"):
         SceneConfig(model_error="yes").validate()
+
+
+def test_ratio_correction_scales_the_data_error_with_the_mean():
+    """A paint corrected by a ratio (restored = ratio x true) has its mean divided by the ratio, so its
+    statistical and edge errors are divided by it too; the equivalent difference keeps half as systematic."""
+    from scatterlab.characterization.estimation import RegionData
+    from scatterlab.characterization.self_calibration import BiasEstimate, bias_corrected
+
+    stat, edge = np.array([0.01, 0.02]), np.array([0.0, 0.01])
+    r = RegionData("paint", np.array([0.4, 0.3]), np.hypot(stat, edge), stat, edge, 80)
+    ratio = np.array([0.5, 0.6])
+    c = bias_corrected(r, BiasEstimate(np.zeros(2), np.zeros(2), 1, ratio))
+    np.testing.assert_allclose(c.mean, [0.8, 0.5])
+    np.testing.assert_allclose(c.statistical, stat / ratio)
+    shift = r.mean - r.mean / ratio  # the equivalent bias, half of it kept
+    np.testing.assert_allclose(c.error, np.sqrt((r.error / ratio) ** 2 + (0.5 * shift) ** 2))
