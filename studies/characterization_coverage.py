@@ -59,6 +59,7 @@ def _trial(task):
     cfg.plates = [plate]
     res = run_plate(plate, cfg, rng)
     out = {"metal": name, "paint": [plate.paint_n, plate.paint_kappa]}
+    true_dolp = _true_region_dolp(res)
     for key in KINDS:
         for region in ("paint", name):
             post = res.metrics[key][f"posterior_{region}"]
@@ -69,15 +70,38 @@ def _trial(task):
                     "ci95": bool(e["covers95"]),
                     "median": e["median"],
                     "truth": e["truth"],
+                    "interval68": list(e["ci68"]),
+                    "interval95": list(e["ci95"]),
                     "converged": bool(post["converged"]),
                 }
+            # the DOLP-level inputs of the posterior, to calibrate the error terms against the truth
+            out[f"{key}/{'metal' if region == name else 'paint'}/dolp"] = {
+                "mean": post["dolp_mean"],
+                "error": post["dolp_error"],
+                "bias_corrected": post["dolp_bias_corrected"],
+                "bias_spread": post["dolp_bias_spread"],
+                "truth": true_dolp["metal" if region == name else "paint"],
+            }
     return out
+
+
+def _true_region_dolp(res) -> dict:
+    """The object's region-mean DOLP per geometry, over the pixels the posteriors use."""
+    from scatterlab.characterization.estimation import default_margin, region_masks
+    from scatterlab.characterization.pipeline import interior
+
+    thetas = np.array([o.theta for o in res.observations])
+    sel = interior(res.labels.shape, max(2, res.labels.shape[0] // 16))
+    masks = region_masks(res.labels, sel, default_margin(thetas.max()))
+    return {
+        r: [float(np.nanmean(o.truth_dolp[m])) for o in res.observations] for r, m in masks.items()
+    }
 
 
 def coverage(trials) -> dict:
     """Coverage per (image, region, parameter) and level, with the binomial standard error of the nominal
     rate and whether the measured rate is within two of them."""
-    keys = [k for k in trials[0] if "/" in k]
+    keys = [k for k in trials[0] if "/" in k and not k.endswith("/dolp")]
     out = {}
     for k in keys:
         N = len(trials)
