@@ -34,7 +34,8 @@ matrix positive semi-definite, rank one: a pure Jones reflection, so
 (M01^2 + M22^2 + M23^2) / M00^2 = 1 and depolarization index 1); Brewster's angle arctan(n) where
 M01/M00 = 1 for the dielectric; the principal angle (M22 = 0) of the metal.
 
-Run time: quick and full are the same computation (a few hundred geometries): about 2 s.
+Run time (quick 86 angles, full 341; the rest is the same) on the shared 2-core machine: quick
+2.4 s near idle, full 3.6 s at load ~7.
 """
 
 import numpy as np
