@@ -6,7 +6,8 @@ DOP of smooth facets (Eq. 115) at the accepted index, Gaussian noise at the text
 (variance 0.1 % and 1 % of the largest DOP), the two-step estimator (Eqs. 116-117), and asks whether the
 published estimates lie inside the spread (2 sd) the noise alone produces and whether the simulated
 estimates share the published bias (n and kappa above the accepted values, theta_r 0.15-0.5 deg low).
-Run time: quick (16 trials) about 30 s at load ~14; full (300 trials): not timed in this revision.
+Run time on the shared 2-core machine: quick (16 trials) 3.3 s at load ~0.3; full (300 trials)
+208 s at load ~9.
 """
 
 import numpy as np

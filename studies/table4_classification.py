@@ -14,8 +14,8 @@ of :func:`scatterlab.deconvolution.classification_errors` -- the columns
 ``scatterlab.characterization.metrics.score_plate`` reports -- and the total as a fraction of all
 pixels, with our own metal share beside the text's implied one. Deviations: simulated plates, the
 interior of the image only, and (quick) 48 px and 40 EM iterations instead of the text's 250.
-Run time: quick 20 s measured on the shared 2-core machine at load ~13 (less when idle); full
-(128 px, 250 iterations, 3 screens): not timed in this revision (the lead's pipeline was changing).
+Run time on the shared 2-core machine: quick 3.7 s at load ~0.5; full (128 px, 250 iterations,
+3 screens) 175 s at load ~7.
 """
 
 import numpy as np

@@ -9,9 +9,9 @@ Like for like: the text's 250 deconvolution iterations (full mode; quick 30), ro
 known to the inversion, the same value table5_synthetic uses (deviation: the text's samples have
 sigma < 1 deg, measured from the specular lobe width). The text's central result is compared as a
 number: the paint's per-pixel scatter (sd of n) shrinks 2.0-4.2x from degraded to corrected; so are
-the metals' mean kappa under turbulence. Run time: quick (48 px, 3 angles, 30 iterations) 134 s
-measured at load ~13 on the shared 2-core machine; full (128 px, 7 angles, 250 iterations): not timed
-in this revision.
+the metals' mean kappa under turbulence. Run time: quick (48 px, 3 angles, 30 iterations) 45 s
+measured at load ~3.7 on the shared 2-core machine; full (128 px, 7 angles, 250 iterations): not run
+(about 140x the quick work by pixels x angles x iterations, i.e. over an hour).
 """
 
 import numpy as np

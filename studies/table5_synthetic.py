@@ -8,8 +8,9 @@ kappa in [0, 25]); per region: the posterior of the region's mean DOLP (noise 0.
 uncertainty report. Compared with Table 5's no-turbulence rows (measured, so also affected by oxidation and
 calibration; see the report).
 
-Run time: quick 82-98 s (400 steps) measured at load ~12-15 on the shared 2-core machine; full (2000 pixels
-per region): not timed in this revision.
+Run time: quick 23 s measured at load ~2 on the shared 2-core machine; full (2000 pixels per region,
+chains run until converged): not run (over 60x the quick pixels with longer chains: well over 10
+minutes).
 """
 
 import warnings

@@ -14,16 +14,23 @@ branch of the (n, kappa) valley the runaway fits take. The posterior is computed
 (n, kappa) grid (flat prior on the text's box n in [0, 5], kappa in [0, 25], theta_r known, Gaussian
 likelihood with the true noise): its 68 % highest-density region, and the 68 % likelihood-ratio
 (Wilks, chi^2 with 2 degrees of freedom) confidence region of the same likelihood, are checked for
-coverage of the true (n, kappa).
+coverage of the true (n, kappa). Why the old study's sampler (600 steps) reported 0-3.6 %
+coverage is measured three ways: the grid posterior's marginal equal-tailed intervals (what the
+sampler reported) on the same trials; the library's emcee path (600 steps and, in full mode, its
+default adaptive run) against the grid's quantiles; and the coverage with truths drawn from the
+prior, where Bayesian intervals must cover 68 %.
 
-Run time: quick (24 trials per case) 55 s measured at load ~9 on the shared 2-core machine;
-full (500/200 trials): 1027 s at load ~13 (before the posterior grid was chunked).
+Run time: quick (24 trials per case) 23-42 s measured at load ~6-7 on the shared 2-core machine;
+full (500/200 trials, with the adaptive-sampler check): 317 s at load ~7.
 """
+
+import time
+import warnings
 
 import numpy as np
 from scatterlab.studies._common import compare, set_verdict
 
-from scatterlab.inversion import fit_dolp, thilak_two_step
+from scatterlab.inversion import ConvergenceWarning, fit_dolp, sample_posterior, thilak_two_step
 from scatterlab.inversion.thilak import thilak_dop
 from scatterlab.plotting import headless_pyplot as plt
 
@@ -72,24 +79,47 @@ def _stats(x, truth):
     }
 
 
-def _coverage(y, ti, sd, quick, chunk=64):
-    """Coverage of the true (n, kappa) by the 68 % HPD region of the grid posterior (flat prior on
-    the box) and by the 68 % likelihood-ratio region (chi^2_2 = 2.30), for the trials ``y`` (K, M),
-    in chunks of ``chunk`` trials (memory). Also the posterior medians (K, 2)."""
+def grid_coverage(y, ti, sd, quick, truth=COPPER, chunk=64):
+    """Coverage of the truth by the exact grid posterior (flat prior on the box) of trials ``y``.
+
+    Parameters
+    ----------
+    y : array (K, M)
+        Measured DOP per trial.
+    ti : array (M,) [rad]
+    sd : float
+        Known noise standard deviation.
+    quick : bool
+        Selects the grid size (``GRIDS``).
+    truth : (n, kappa) or array (K, 2)
+        The true index of every trial.
+    chunk : int
+        Trials per block (memory).
+
+    Returns
+    -------
+    dict
+        ``hpd`` (K,) the truth inside the 68 % highest-density region; ``lr`` (K,) inside the 68 %
+        likelihood-ratio region (chi^2_2 <= 2.30); ``marginal`` (K, 2) n and kappa inside their
+        marginal equal-tailed 68 % intervals (what ``Posterior.interval(0.68)`` reports); ``q``
+        (K, 2, 3) the marginal 16/50/84 % quantiles of n and kappa.
+    """
     grid_n, grid_k = (np.linspace(0.0, hi, k) for hi, k in zip((5.0, 25.0), GRIDS[quick]))
     beta = (ti + THETA_R) / 2
     g = thilak_dop(grid_n[:, None, None], grid_k[None, :, None], beta).reshape(-1, ti.size)
+    truth = np.broadcast_to(np.asarray(truth, float), (len(y), 2))
     parts = [
-        _coverage_chunk(y[i : i + chunk], g, beta, sd, grid_n, grid_k)
+        _coverage_chunk(y[i : i + chunk], truth[i : i + chunk], g, beta, sd, grid_n, grid_k)
         for i in range(0, len(y), chunk)
     ]
-    hpd, lr, med = (np.concatenate(x) for x in zip(*parts))
-    return float(hpd.mean()), float(lr.mean()), med
+    return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
 
 
-def _coverage_chunk(y, g, beta, sd, grid_n, grid_k):
+def _coverage_chunk(y, truth, g, beta, sd, grid_n, grid_k):
+    """:func:`grid_coverage` for one block of trials ``y`` (K, M) with truths ``truth`` (K, 2)."""
     chi2 = ((g**2).sum(1)[:, None] - 2 * g @ y.T + (y**2).sum(1)[None, :]) / sd**2  # (G, K)
-    chi2_true = (((thilak_dop(*COPPER, beta) - y) ** 2).sum(1)) / sd**2
+    model_true = thilak_dop(truth[:, :1], truth[:, 1:], beta)  # (K, M)
+    chi2_true = ((model_true - y) ** 2).sum(1) / sd**2
     chi2_min = np.minimum(chi2.min(0), chi2_true)
     lr = chi2_true - chi2_min <= 2.30
     w = np.exp(-(chi2 - chi2_min) / 2)
@@ -99,11 +129,102 @@ def _coverage_chunk(y, g, beta, sd, grid_n, grid_k):
     thresh = ws[np.argmax(np.cumsum(ws, axis=0) >= 0.68, axis=0), np.arange(y.shape[0])]
     hpd = np.exp(-(chi2_true - chi2_min) / 2) / total >= thresh
     wn = w.reshape(grid_n.size, grid_k.size, -1)
-    med = [
-        [grid[np.searchsorted(np.cumsum(m[:, k]), 0.5)] for k in range(y.shape[0])]
-        for grid, m in ((grid_n, wn.sum(1)), (grid_k, wn.sum(0)))
-    ]
-    return hpd, lr, np.array(med).T
+    q = np.array(
+        [
+            [
+                [np.interp(p, np.cumsum(m[:, k]), grid) for p in (0.16, 0.5, 0.84)]
+                for k in range(len(y))
+            ]
+            for grid, m in ((grid_n, wn.sum(1)), (grid_k, wn.sum(0)))
+        ]
+    ).transpose(1, 0, 2)  # (K, 2, 3)
+    marginal = (q[:, :, 0] <= truth) & (truth <= q[:, :, 2])
+    return {"hpd": hpd, "lr": lr, "marginal": marginal, "q": q}
+
+
+def prior_calibration(quick, trials, rng):
+    """Coverage when the truth is drawn from the prior (flat on the box) instead of fixed at copper.
+
+    Bayesian intervals are calibrated on average over truths drawn from the prior; this measures
+    it on the low-noise 3- and 10-measurement geometries.
+
+    Parameters
+    ----------
+    quick : bool
+    trials : int
+        Truths drawn per geometry.
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    dict
+        Per geometry: ``hpd``, ``marginal_n``, ``marginal_kappa`` coverage fractions.
+    """
+    out = {}
+    for key in ("3", "10"):
+        ti, sd, _ = _simulate(key, "low", 1, rng)
+        truth = np.column_stack([rng.uniform(0, 5, trials), rng.uniform(0, 25, trials)])
+        clean = thilak_dop(truth[:, :1], truth[:, 1:], (ti + THETA_R) / 2)
+        y = clean + sd * rng.standard_normal(clean.shape)
+        c = grid_coverage(y, ti, sd, quick, truth)
+        out[f"low_{key}"] = {
+            "hpd": float(c["hpd"].mean()),
+            "marginal_n": float(c["marginal"][:, 0].mean()),
+            "marginal_kappa": float(c["marginal"][:, 1].mean()),
+        }
+    return out
+
+
+def _mcmc_check(ctx, trials, adaptive):
+    """The library's emcee path against the exact grid posterior, on the same trials.
+
+    Parameters
+    ----------
+    ctx : StudyContext
+    trials : int
+        Trials per case (low noise, 3 and 10 measurements).
+    adaptive : bool
+        Also run the library's default (extend until converged, ``n_steps=None``).
+
+    Returns
+    -------
+    dict
+        Per run kind (``"600 steps"`` as the old study ran it, ``"adaptive"``): ``max_dq_n``,
+        ``max_dq_kappa`` (largest |sampler - grid| of the marginal 16/50/84 % quantiles),
+        ``unconverged`` (fraction of chains the library flags), ``same_coverage`` (fraction of
+        intervals that agree with the grid's on containing copper), ``seconds`` per chain.
+    """
+    kinds = {"600 steps": 600} | ({"adaptive": None} if adaptive else {})
+    rec = {k: {"dq": [], "unconverged": [], "same": [], "seconds": []} for k in kinds}
+    for key in ("3", "10"):
+        ti, sd, y = _simulate(key, "low", trials, ctx.rng)
+        grid = grid_coverage(y, ti, sd, ctx.quick)
+        for kind, steps in kinds.items():
+            r = rec[kind]
+            for row, qg, cg in zip(y, grid["q"], grid["marginal"]):
+                t0 = time.perf_counter()
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", ConvergenceWarning)  # counted below
+                    p = sample_posterior(row, ti, np.full(ti.size, THETA_R), sd, ctx.rng,
+                                         sigma=0.3, diffuse="none", n_steps=steps)  # fmt: skip
+                r["seconds"].append(time.perf_counter() - t0)
+                qm = p.quantiles([0.16, 0.5, 0.84])[:, :2].T  # (2, 3)
+                r["dq"].append(np.abs(qm - qg).max(1))
+                r["unconverged"].append(not p.converged)
+                r["same"].append(((qm[:, 0] <= COPPER) & (np.asarray(COPPER) <= qm[:, 2])) == cg)
+    return {
+        kind: {
+            "max_dq_n": float(np.max(r["dq"], 0)[0]),
+            "max_dq_kappa": float(np.max(r["dq"], 0)[1]),
+            "median_dq_n": float(np.median(r["dq"], 0)[0]),
+            "median_dq_kappa": float(np.median(r["dq"], 0)[1]),
+            "unconverged": float(np.mean(r["unconverged"])),
+            "same_coverage": float(np.mean(r["same"])),
+            "seconds": float(np.mean(r["seconds"])),
+            "chains": len(r["dq"]),
+        }
+        for kind, r in rec.items()
+    }
 
 
 def _simulate(key, level, trials, rng, reading="variance = f Pmax (text)"):
@@ -122,7 +243,8 @@ def _case(ctx, level, key, trials):
     with ctx.step("least_squares"):
         ls = fit_dolp(y, ti, np.full(m, THETA_R), sigma=0.3, diffuse="none", noise=sd)
     with ctx.step("grid_posterior"):
-        hpd, lr, med = _coverage(y, ti, sd, ctx.quick)
+        cov = grid_coverage(y, ti, sd, ctx.quick)
+    med = cov["q"][:, :, 1]
     n_ok = th.n[th.ok]
     return {
         "noise_sd": sd,
@@ -142,8 +264,9 @@ def _case(ctx, level, key, trials):
             "n": _stats(med[:, 0], COPPER[0]),
             "kappa": _stats(med[:, 1], COPPER[1]),
         },
-        "coverage68_bayes_hpd": hpd,
-        "coverage68_likelihood_ratio": lr,
+        "coverage68_bayes_hpd": float(cov["hpd"].mean()),
+        "coverage68_likelihood_ratio": float(cov["lr"].mean()),
+        "coverage68_marginal_equal_tailed": cov["marginal"].mean(0).tolist(),  # n, kappa
         "published": dict(zip(PUB_KEYS, PUBLISHED[level][key])),
     }
 
@@ -318,10 +441,77 @@ def run(ctx):
         + _calibration_text(hpd, lrc, rows[0][2]["trials"])
         + "Posterior medians are no better point estimates than least squares here (table)."
     )
+    _explain_old_coverage(ctx, rows)
     set_verdict(
         ctx,
         "not reproduced",
         f"mean n {min(ratio_n):.1f}-{max(ratio_n):.1f} x published; {inside}/{len(cmp)} means "
         f"inside 2 sigma; 68 % coverage HPD {min(hpd):.0%}-{max(hpd):.0%}, "
         f"LR {min(lrc):.0%}-{max(lrc):.0%}",
+    )
+
+
+def _explain_old_coverage(ctx, rows):
+    """Why the old 600-step sampler's 68 % intervals covered copper in 0-3.6 % of the trials."""
+    marg = np.array([r["coverage68_marginal_equal_tailed"] for _, _, r in rows])  # (cases, 2)
+    trials = "/".join(str(t) for t in dict.fromkeys(r["trials"] for _, _, r in rows))  # low/high
+    n_prior = 48 if ctx.quick else 400
+    with ctx.step("prior_calibration"):
+        prior = prior_calibration(ctx.quick, n_prior, ctx.rng)
+    with ctx.step("mcmc_check"):
+        mc = _mcmc_check(ctx, 1 if ctx.quick else 2, adaptive=not ctx.quick)
+    ctx.metrics["coverage68_marginal_equal_tailed_range"] = [float(marg.min()), float(marg.max())]
+    ctx.metrics["prior_calibration"] = prior
+    ctx.metrics["mcmc_check"] = mc
+    se = np.sqrt(0.68 * 0.32 / n_prior)
+    ctx.say(
+        "Why the old study's sampler (sample_posteriors, 600 steps) reported 68 % intervals "
+        "containing copper in 0-3.6 % of the trials, by measurement. (1) It reported the marginal "
+        "equal-tailed intervals of n and kappa (Posterior.interval), not a joint region; the exact "
+        "grid posterior's marginal equal-tailed 68 % intervals cover copper in "
+        f"{marg.min():.0%}-{marg.max():.0%} of the same {trials} trials per case (n: "
+        + ", ".join(f"{m[0]:.0%}" for m in marg)
+        + "; kappa: "
+        + ", ".join(f"{m[1]:.0%}" for m in marg)
+        + ", cases in table order), so the low number is mainly a property of the posterior, "
+        "not of the sampler. The cause is the shape of the problem: with few measurements the "
+        "likelihood is a long valley, most of the flat prior's area along it lies far from "
+        "copper, and copper sits at the valley's end next to the bound n = 0, so central "
+        "intervals of the marginals exclude it. (2) The 600-step chains were also short: "
+        + _mcmc_text(mc, ctx.quick)
+        + " (3) Bayesian intervals are calibrated only on average over truths drawn from the "
+        "prior: drawing (n, kappa) uniformly on the box (same geometries and noise), the grid "
+        "posterior's marginal intervals cover "
+        + "; ".join(
+            f"{k}: n {v['marginal_n']:.0%}, kappa {v['marginal_kappa']:.0%}, HPD {v['hpd']:.0%}"
+            for k, v in prior.items()
+        )
+        + f" (68 % +/- {2 * se:.0%}, binomial 2 SE, {n_prior} truths). For a fixed truth at the "
+        "valley's end, as copper is here, the likelihood-ratio region above is the calibrated "
+        "statement; the marginal credible intervals are not confidence intervals."
+    )
+
+
+def _mcmc_text(mc, quick):
+    """One sentence per run kind of :func:`_mcmc_check`."""
+    parts = []
+    for kind, v in mc.items():
+        parts.append(
+            f"{kind}: the library flags {v['unconverged']:.0%} of {v['chains']} chains as not "
+            f"converged; their 16/50/84 % quantiles differ from the exact grid's by a median "
+            f"{v['median_dq_n']:.2f} (max {v['max_dq_n']:.2f}) in n and {v['median_dq_kappa']:.2f} "
+            f"(max {v['max_dq_kappa']:.2f}) in kappa, and agree with the grid on whether copper is "
+            f"inside in {v['same_coverage']:.0%} of the intervals ({v['seconds']:.0f} s a chain)"
+        )
+    return (
+        "; ".join(parts)
+        + ". The old study silenced the ConvergenceWarning. Where the maximum is large (above "
+        "~1 in n), a chain stayed on one branch of the valley (walkers start at the "
+        "least-squares minima)"
+        + (
+            "; quick mode runs only the 600-step chains, full mode also the library's default "
+            "adaptive run."
+            if quick
+            else "."
+        )
     )
