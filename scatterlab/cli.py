@@ -7,6 +7,7 @@
     scatterlab study run all [--quick] [--out DIR]
     scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
     scatterlab analyze DATASET [--out DIR] [--force] [--psf blind|diffraction] [--iterations N]
+                     [--classes adaptive|priors] [--bias-samples N]
     scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--time-convention exp(-iwt)]
 
 Sweeps inside studies use ``--workers N`` local processes or a Dask cluster
@@ -156,6 +157,8 @@ def _analyze(args) -> int:
         sigma=args.sigma,
         posterior_steps=args.posterior_steps,
         seed=args.seed,
+        classes=args.classes,
+        bias_samples=args.bias_samples,
     )
     return _report(
         args,
@@ -335,6 +338,18 @@ def main(argv=None) -> int:
     )
     an.add_argument("--iterations", type=int, default=150, help="EM iterations (default 150)")
     an.add_argument("--priors", choices=["ch5", "ch6", "ch7"], default="ch7", help="DOLP prior set")
+    an.add_argument(
+        "--classes",
+        choices=["adaptive", "priors"],
+        default="adaptive",
+        help="regions from priors re-centred on the data's DOLP histogram (default) or the fixed priors",
+    )
+    an.add_argument(
+        "--bias-samples",
+        type=int,
+        default=3,
+        help="blind re-simulations averaged by the self-calibration (default 3, >= 1)",
+    )
     an.add_argument(
         "--sigma", type=float, default=0.3, help="known roughness (rms facet slope, default 0.3)"
     )

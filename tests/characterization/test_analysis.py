@@ -61,6 +61,11 @@ def test_analyze_cli_reads_a_tiff_stack_with_its_sidecar_and_names_wrong_files(t
         == 2
     )
     assert "iterations" in capsys.readouterr().err
+    h5 = str(EXAMPLES / "painted_plate.h5")
+    assert main(["analyze", h5, "--out", str(tmp_path / "d"), "--bias-samples", "0"]) == 2
+    assert "bias_samples must be in [1, 20]" in capsys.readouterr().err
+    with pytest.raises(SystemExit):  # argparse: not one of the choices
+        main(["analyze", h5, "--out", str(tmp_path / "e"), "--classes", "kmeans"])
 
 
 def test_analyze_with_the_known_diffraction_psf_recovers_the_paint(tmp_path):
