@@ -10,7 +10,7 @@ import warnings
 
 import numpy as np
 
-from scatterlab.inversion import sample_posteriors
+from scatterlab.inversion import sample_posterior
 from scatterlab.inversion.model_error import dolp_model_error, dolp_model_error_covariance
 
 LEVELS = (0.68, 0.95)
@@ -33,16 +33,43 @@ def sampler_settings(quick):
     dict of :func:`scatterlab.inversion.sample_posterior` sampler keywords.
     """
     if quick:
-        return {"n_walkers": 12, "n_steps": 150, "n_ensembles": 1, "moves": "de"}
+        return {"n_walkers": 8, "n_steps": 100, "n_ensembles": 1, "moves": "de"}
     return {"n_walkers": 16, "n_steps": 400, "n_ensembles": 1, "moves": "de"}
 
 
+def _one(task):
+    """One posterior; a second seed if emcee fails, else the failure as a string (the study
+    counts it as not covered and reports it). Seen in a full run: ``ValueError: At least one
+    parameter value was NaN`` from emcee's compute_log_prob, and a singular KDE covariance."""
+    y, th, noise, seeds, kw = task
+    for seed in seeds:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return sample_posterior(y, th, th, noise, seed, **kw)
+        except (ValueError, np.linalg.LinAlgError) as exc:
+            err = f"{type(exc).__name__}: {exc}"
+    return err
+
+
 def _posteriors(y, th, noise, rng, executor, quick, **kw):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return sample_posteriors(
-            y, th, th, noise, rng, executor=executor, **sampler_settings(quick), **kw
-        )
+    """sample_posterior per row of ``y`` (K, M) through ``executor``; failures are strings."""
+    seeds = rng.integers(2**63, size=(y.shape[0], 2))
+    kw = dict(sampler_settings(quick), **kw)
+    tasks = [(row, th, noise, [int(x) for x in sd], kw) for row, sd in zip(y, seeds)]
+    return list(executor.map(_one, tasks))
+
+
+def _quantiles(posts, q):
+    """(K, len(q), 3) quantiles of each posterior; NaN for a failed one."""
+    return np.array(
+        [p.quantiles(q) if not isinstance(p, str) else np.full((len(q), 3), np.nan) for p in posts]
+    )
+
+
+def failures(posts):
+    """The failure messages among ``posts`` (list of Posterior or str)."""
+    return [p for p in posts if isinstance(p, str)]
 
 
 def posterior_bias(data, truth, th, noises, rng, executor, quick):
@@ -67,11 +94,15 @@ def posterior_bias(data, truth, th, noises, rng, executor, quick):
     out = {}
     for noise in noises:
         posts = _posteriors(np.clip(data, 0, 1), th, noise, rng, executor, quick)
-        med = np.array([p.quantiles([0.5])[0] for p in posts])
-        iv = np.array([p.interval(0.68) for p in posts])  # (C, 2, 3)
-        width = 0.5 * (iv[:, 1] - iv[:, 0])
-        bias = med - truth
-        out[noise] = {"bias": bias, "width": width, "exceeds": np.abs(bias) > width}
+        q = _quantiles(posts, [0.16, 0.5, 0.84])
+        width = 0.5 * (q[:, 2] - q[:, 0])
+        bias = q[:, 1] - truth
+        out[noise] = {
+            "bias": bias,
+            "width": width,
+            "exceeds": np.abs(bias) > width,
+            "failed": failures(posts),
+        }
     return out
 
 
@@ -83,7 +114,7 @@ def covered(posts, truth, level):
 
     Parameters
     ----------
-    posts : list of Posterior (K,)
+    posts : list (K,) of Posterior, or str for a failed run (counted as not covered)
     truth : ndarray (2,) -- true (n, kappa).
     level : float in (0, 1)
 
@@ -92,11 +123,11 @@ def covered(posts, truth, level):
     ndarray (K,) bool.
     """
     a = (1 - level) / 2
-    q = np.array([p.quantiles([a, 1 - a, level]) for p in posts])  # (K, 3, 3)
+    q = _quantiles(posts, [a, 1 - a, level])  # (K, 3, 3); NaN (failed): not covered
     lo, hi = q[:, 0, :2], q[:, 1, :2]
     if truth[1] == 0:
         lo, hi = lo.copy(), hi.copy()
-        lo[:, 1], hi[:, 1] = 0.0, q[:, 2, 1]
+        lo[:, 1], hi[:, 1] = np.where(np.isnan(q[:, 2, 1]), np.nan, 0.0), q[:, 2, 1]
     return np.all((lo <= truth) & (truth <= hi), -1)
 
 
@@ -124,12 +155,14 @@ def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executo
 
     Returns
     -------
-    dict form -> level -> ndarray (len(noises) * draws * C,) bool, covered or not.
+    dict form -> level -> ndarray (len(noises) * draws * C,) bool, covered or not; and
+    ``"failed"`` -> list of the failed runs' messages.
     """
     rng = np.random.default_rng(rng)
     t = dolp_model_error(th, th, table=table)
     C = dolp_model_error_covariance(th, th, table=table)
     hits = {f: {lv: [] for lv in LEVELS} for f in FORMS}
+    failed = []
     for noise in noises:
         y = d0[None] + noise * rng.standard_normal((draws,) + d0.shape)
         y = np.clip(np.abs(y), 0, 1).reshape(-1, d0.shape[-1])
@@ -149,7 +182,9 @@ def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executo
             for r, p in zip(rows, ps):
                 pipe[r] = p
         posts["pipeline"] = pipe
+        failed += [m for ps in posts.values() for m in failures(ps)]
         for f, ps in posts.items():
             for lv in LEVELS:
                 hits[f][lv].append(covered(ps, truth, lv))
-    return {f: {lv: np.concatenate(v) for lv, v in per.items()} for f, per in hits.items()}
+    out = {f: {lv: np.concatenate(v) for lv, v in per.items()} for f, per in hits.items()}
+    return dict(out, failed=failed)

@@ -1047,6 +1047,13 @@ def _report_posterior(ctx, pbias, pcover, cell_list):
             m[f"posterior_coverage{int(100 * lv)}_{f}"] = float(np.mean(per[lv]))
             for n in pcover:
                 m[f"{n}_posterior_coverage{int(100 * lv)}_{f}"] = float(np.mean(pcover[n][f][lv]))
+    failed = [x for n in pcover for x in pcover[n]["failed"]]
+    failed += [x for per in pbias.values() for b in per.values() for x in b["failed"]]
+    m["posterior_failures"] = len(failed)
+    ctx.say(
+        f"sample_posterior failed (two seeds) in {len(failed)} of the runs (counted as not "
+        "covered)" + (f", e.g. {failed[0]}." if failed else ".")
+    )
     ctx.say(
         "Coverage of the true (n, kappa) by sample_posterior's equal-tailed 68 % / 95 % credible "
         "intervals (glass: kappa = 0 on the prior's edge, one-sided [0, q]) on held-out "
