@@ -19,8 +19,14 @@ specular fraction.
 Cells (rms slope, sigma_h / lambda): (0.1, 0.1), (0.1, 0.25), (0.3, 0.1), (0.3, 0.25),
 (0.3, 0.5), (0.6, 0.25), (0.6, 0.5), (0.6, 1.0): correlation lengths 0.24-3.5 wavelengths (the
 surface of 40 wavelengths holds a taper of 10; longer correlation lengths, i.e. the very rough
-regime at small slopes, need surfaces this study cannot afford on 2 cores). Incidence 10-70 deg:
-80 deg needs a taper, and a surface, about 4x longer (the Thorsos taper's power correction).
+regime at small slopes, need surfaces this study cannot afford on 2 cores). Incidence 10-70 deg
+on these surfaces; 80 deg in a separate pass (full mode: every cell; quick mode: the PEC of one
+cell) on surfaces of 150 wavelengths with a taper of 37.4 (the MoM's check asks g >= 37.04 at
+80 deg: the Thorsos taper's power correction below 0.02), 2 realizations for glass and paint and
+4 for the metals and the PEC, with a convergence check (full mode): cell (0.3, 0.25) again at
+twice the length and taper (300 and 74.9; metals and PEC only, the exact formulation of glass
+does not fit), the change in specular DOLP stated against the combined standard error. The
+80 deg row extends the model-error table; the pipeline's 30-60 deg values do not depend on it.
 Profiles are resampled at equal arc-length steps (1/15 wavelength) so the steep ones keep 10
 points per wavelength inside glass. Exact powers are means over a 5 deg aperture (a few speckles
 of each realization).

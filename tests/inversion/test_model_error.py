@@ -162,3 +162,20 @@ def test_aluminium_is_covered_by_the_sampled_posterior_with_the_independent_term
         lo, hi = post.interval(0.95)[:, :2]
         hits.append(bool(np.all((lo <= truth) & (truth <= hi))))
     assert sum(hits) >= 7, hits
+
+
+def test_the_80_deg_row_leaves_the_pipelines_30_to_60_deg_unchanged():
+    """The table reaches 80 deg (longer surfaces, see the study); between 30 and 60 deg the
+    interpolation never reaches that row, so the pipeline's term is the same as without it."""
+    t = model_error_table()
+    assert np.degrees(t["theta_i"][-1]) == pytest.approx(80.0)
+    cut = dict(t, theta_i=t["theta_i"][:-1], error=t["error"][:, :, :-1])
+    for s in (None, 0.1, 0.3, 0.6):
+        assert np.array_equal(
+            dolp_model_error(TH, TH, s, table=t), dolp_model_error(TH, TH, s, table=cut)
+        )
+    # at 80 deg the 80 deg row, not the 70 deg one clamped
+    s_idx = int(np.argmin(np.abs(t["theta_s"] - t["theta_i"][-1])))
+    at80 = dolp_model_error(t["theta_i"][-1], t["theta_s"][s_idx], 0.3, 1.5, table=t)
+    assert at80 == pytest.approx(t["error"][0, 1, -1, s_idx], rel=1e-12)
+    assert np.all(np.isfinite(t["error"][:, :, -1])) and np.all(t["error"][:, :, -1] >= 0)
