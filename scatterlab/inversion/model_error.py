@@ -20,8 +20,18 @@ from the same specular DOLP is not (specular DOLP hardly constrains sigma, Fig. 
 selecting the error with it gave intervals that covered the truth in about half the held-out
 cases. With both unknown (the largest tabulated error) and the correlated form, held-out exact
 DOLP plus noise 0.005 was covered at 96 % (31 % without the term; test
-``tests/inversion/test_model_error.py``); per material the coverage is uneven (above nominal for
-the dielectrics, below for aluminium: the study's report gives the numbers).
+``tests/inversion/test_model_error.py``).
+
+Use the term with :func:`~scatterlab.inversion.sample_posterior` (as the characterization
+pipeline does), not with ``fit_dolp``'s Laplace widths, for metals: with the term the posterior
+of a metal's kappa is far from Gaussian (it spans most of the prior), and the Laplace interval at
+the least-squares point (a near-dielectric fit) missed aluminium's true kappa in about a third
+of the held-out cases (71 %, 50 % in a re-run), where the sampled posterior's interval
+covers it. With emcee (study ``dolp_vs_mom``, held-out realizations plus noise 0.002 and 0.01,
+95 % intervals) the pipeline's form (``sigma`` known, ``eta`` None, independent) covered the
+true (n, kappa) in 98 % of the cases pooled (glass, paint and aluminium 100 %, iron 94 %), and
+the independent form with both unknown in 100 % (3-16 % without the term). The independent form
+is then enough; the correlated one (``covariance=``) is the choice for ``fit_dolp``.
 
 The table (``scatterlab/data/model_error/dolp_mom.npz``) is written by the study
 ``studies/dolp_vs_mom.py`` (function ``model_error_table``): incoherent averages over realizations
@@ -29,14 +39,17 @@ of 1-D Gaussian rough surfaces (exact two-medium MoM for glass 1.5 and paint 1.3
 impedance condition for iron 3.60 - j5.88 and aluminium 1.44 - j16), both polarizations, the exact
 DOLP :math:`(\sigma_s - \sigma_p)/(\sigma_s + \sigma_p)` against the inversion's forward model
 (the pBRDF in the specular plane, Torrance-Sparrow shadowing, Hyde's diffuse term). For each
-material, rms slope and geometry the entry is the root mean square of that difference over the
-height-to-wavelength ratios simulated at that slope (the inversion does not know the height),
-which includes the MoM's own standard error. Cells the MoM could not resolve (no signal) hold the
-material's largest entry.
+material, rms slope and geometry the entry is the largest absolute value of that difference over
+the height-to-wavelength ratios simulated at that slope (the inversion does not know the height;
+the root mean square over the heights, used first, under-stated the worst height by up to
+sqrt(2) and left iron at slope 0.1 uncovered), which includes the MoM's own standard error.
+Cells the MoM could not resolve (no signal) hold the material's largest entry. The 80 deg row,
+where present (``length_80deg`` in the table), comes from longer surfaces (150 wavelengths,
+taper 37.4) and fewer realizations.
 
-Outside the tabulated range (incidence 10-70 deg, rms slopes 0.1-0.6) the table is clamped to its
-edge: an extrapolation, stated in the returned value's docstring and the study's report. The
-error is tabulated in the plane of incidence only (``phi`` = pi forward, 0 backward).
+Outside the tabulated range (the table's ``theta_i``, 10-70 or 10-80 deg; rms slopes 0.1-0.6)
+the table is clamped to its edge: an extrapolation. The error is tabulated in the plane of
+incidence only (``phi`` = pi forward, 0 backward).
 """
 
 from __future__ import annotations
@@ -121,8 +134,9 @@ def dolp_model_error(theta_i, theta_r, sigma=None, eta=None, *, phi=np.pi, table
     -------
     ndarray, broadcast shape of the inputs: DOLP standard deviation (>= 0, finite), for the
     ``systematic`` argument of :func:`~scatterlab.inversion.fit_dolp` and
-    :func:`~scatterlab.inversion.sample_posterior`. Incidences outside 10-70 deg are clamped to
-    the table's edge (extrapolated).
+    :func:`~scatterlab.inversion.sample_posterior`. Incidences outside the table's ``theta_i``
+    (10-70 deg, or 10-80 deg in a table with the 80 deg row) are clamped to its edge
+    (extrapolated).
     """
     t = model_error_table() if table is None else table
     ti = as_angle(theta_i, "theta_i")

@@ -103,8 +103,9 @@ def _coverage(noise=0.005, draws=4, seed=0):
 
 def test_exact_solution_dolp_is_covered_only_with_the_model_error_term():
     """Held-out MoM DOLP (4 materials x 8 roughness cells, 30-60 deg specular) plus noise 0.005.
-    Without the term the intervals miss the truth in most cases (measured 32 %); with it the
-    pooled coverage is at the nominal 95 % (measured 95 %). Tolerance: the 32 cells are the
+    Without the term the intervals miss the truth in most cases (measured 31 %); with it the
+    pooled coverage is at the nominal 95 % (measured 96 % with the table of the largest error
+    over the heights, 95 % with the first, rms, table). Tolerance: the 32 cells are the
     independent units, binomial sd 0.04 at 95 %: >= 0.85 is 2.5 sd; <= 0.6 without."""
     cov = _coverage()
     assert cov["without"] <= 0.6
@@ -125,3 +126,57 @@ def test_the_term_plugs_into_sample_posterior():
         )
     assert np.allclose(post.data_error(), np.sqrt(0.005**2 + t**2))
     assert np.all(np.isfinite(post.samples))
+
+
+def test_aluminium_is_covered_by_the_sampled_posterior_with_the_independent_term():
+    """The pipeline's form (characterization.region_posteriors with model_error=True): sigma
+    known, material unknown, ``systematic = dolp_model_error(th, th, sigma)``, emcee. Held-out
+    aluminium DOLP (8 roughness cells) plus noise 0.01: the 95 % credible intervals hold the
+    true (n, kappa) = (1.44, 16) in every cell (measured 8 of 8; the Laplace intervals of fit_dolp
+    with the same term held it in 71 % of the study's cases: a metal's kappa posterior spans most
+    of the prior, far from Gaussian). Tolerance: 8 independent cells, >= 7 of 8 (at a true rate
+    of 95 % the chance of 6 or fewer is 6 %)."""
+    z = np.load(HELDOUT)
+    th = np.radians(z["theta_deg"])
+    k = int(np.flatnonzero(z["materials"] == "aluminium")[0])
+    eta = z["eta"][k]
+    truth = np.array([eta.real, -eta.imag])
+    rng = np.random.default_rng(4)
+    y = np.clip(np.abs(z["dolp"][k] + 0.01 * rng.standard_normal(z["dolp"][k].shape)), 0, 1)
+    hits = []
+    for row, (slope, _) in zip(y, z["cells"]):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            post = sample_posterior(
+                row,
+                th,
+                th,
+                0.01,
+                rng,
+                sigma=slope,
+                systematic=dolp_model_error(th, th, slope),
+                n_walkers=16,
+                n_ensembles=1,
+                n_steps=300,
+                moves="de",
+            )
+        lo, hi = post.interval(0.95)[:, :2]
+        hits.append(bool(np.all((lo <= truth) & (truth <= hi))))
+    assert sum(hits) >= 7, hits
+
+
+def test_the_80_deg_row_leaves_the_pipelines_30_to_60_deg_unchanged():
+    """The table reaches 80 deg (longer surfaces, see the study); between 30 and 60 deg the
+    interpolation never reaches that row, so the pipeline's term is the same as without it."""
+    t = model_error_table()
+    assert np.degrees(t["theta_i"][-1]) == pytest.approx(80.0)
+    cut = dict(t, theta_i=t["theta_i"][:-1], error=t["error"][:, :, :-1])
+    for s in (None, 0.1, 0.3, 0.6):
+        assert np.array_equal(
+            dolp_model_error(TH, TH, s, table=t), dolp_model_error(TH, TH, s, table=cut)
+        )
+    # at 80 deg the 80 deg row, not the 70 deg one clamped
+    s_idx = int(np.argmin(np.abs(t["theta_s"] - t["theta_i"][-1])))
+    at80 = dolp_model_error(t["theta_i"][-1], t["theta_s"][s_idx], 0.3, 1.5, table=t)
+    assert at80 == pytest.approx(t["error"][0, 1, -1, s_idx], rel=1e-12)
+    assert np.all(np.isfinite(t["error"][:, :, -1])) and np.all(t["error"][:, :, -1] >= 0)

@@ -35,7 +35,7 @@ def test_slope_pdf_normalised_with_variance_sigma2(sigma):
 
 
 @pytest.mark.parametrize("eta", [GLASS, IRON, AL])
-@pytest.mark.parametrize("theta", np.radians([10, 40, 70]))
+@pytest.mark.parametrize("theta", np.radians([10, 40, 70, 80]))
 def test_smooth_limit_integrates_to_fresnel(eta, theta):
     """sigma -> 0: the lobe becomes a delta at the specular angle carrying R_s, R_p."""
     ts = np.linspace(-np.pi / 2, np.pi / 2, 400001)
