@@ -80,7 +80,7 @@ import hashlib
 import json
 import time
 import warnings
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -1423,7 +1423,25 @@ def _sample_task(task):
     y, seed, args, kw = task
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)  # kept in Posterior.messages
-        return sample_posterior(y, *args, rng=np.random.default_rng(seed), **kw)
+        try:
+            return sample_posterior(y, *args, rng=np.random.default_rng(seed), **kw)
+        except (ValueError, np.linalg.LinAlgError) as err:
+            # emcee's KDE move can meet a singular walker covariance, and a move can propose a NaN
+            # parameter (both seen once in 576 problems of studies/dolp_vs_mom.py): one rerun from another
+            # seed with differential-evolution moves. Invalid input raises the same error again.
+            if kw.get("backend") is not None:
+                raise
+            sampler = kw.get("sampler")
+            retry = (
+                dict(kw, sampler=replace(sampler, moves="de"))
+                if sampler is not None
+                else dict(kw, moves="de")
+            )
+            post = sample_posterior(y, *args, rng=np.random.default_rng([seed, 1]), **retry)
+            post.messages.append(
+                f"first run failed ({type(err).__name__}: {err}); rerun with DE moves"
+            )
+            return post
 
 
 def _per_problem(value, k, ndim_shared):

@@ -141,6 +141,39 @@ def test_many_problems_through_an_executor_are_reproducible(tmp_path):
         np.testing.assert_array_equal(pa.chain, pb.chain)
 
 
+def test_a_failed_emcee_run_is_rerun_once_with_de_moves(monkeypatch):
+    """emcee's KDE move can meet a singular covariance (LinAlgError) and a move can propose NaN
+    (ValueError); sample_posteriors reruns that one problem with DE moves instead of failing the batch, says
+    so in its messages, and a second failure propagates."""
+    from scatterlab.inversion import posterior as post_mod
+
+    real, calls = post_mod.sample_posterior, []
+
+    def flaky(y, *a, **kw):
+        calls.append(kw.get("moves"))
+        if len(calls) == 1:
+            raise np.linalg.LinAlgError("singular matrix")
+        return real(y, *a, **kw)
+
+    monkeypatch.setattr(post_mod, "sample_posterior", flaky)
+    y = model_dolp(1.39, 0.34, 0.3, TI, TR)[None]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        (p,) = sample_posteriors(y, TI, TR, 2e-3, np.random.default_rng(3), n_steps=200)
+    assert calls == [None, "de"]
+    assert any("rerun with DE moves" in m for m in p.messages)
+    assert np.isfinite(p.chain).all()
+
+    def broken(y, *a, **kw):
+        raise ValueError("At least one parameter value was NaN")
+
+    monkeypatch.setattr(post_mod, "sample_posterior", broken)
+    from scatterlab.runtime.executors import TaskError
+
+    with pytest.raises(TaskError, match="parameter value was NaN"):
+        sample_posteriors(y, TI, TR, 2e-3, np.random.default_rng(3), n_steps=200)
+
+
 def test_multimodality_detector_separates_two_clusters_and_not_one():
     rng = np.random.default_rng(0)
     one = rng.normal([3.0, 5.0, 0.3], [0.05, 0.05, 0.01], (32, 3))
