@@ -22,6 +22,7 @@ Quick mode: 32 x 32 pixels, 100 iterations per run (about 15-25 s). Full mode: 6
 """
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.deconvolution import blind_deconvolve, object_grid, resample_psf
 from scatterlab.imaging import (
@@ -251,6 +252,13 @@ def report(ctx, rows):
     m["aop_max_error_ours_deg"] = max(err_ours)
     m["aop_max_error_published_deg"] = max(err_pub)
     closer = max(err_ours) < max(err_pub)
+    # simulated, not the laboratory data: the method is reproduced, not the published errors
+    set_verdict(
+        ctx,
+        "partly",
+        f"AOP of the two bars recovered blind to {max(err_ours):.1f} deg (published "
+        f"{err_pub[0]:.0f} and {err_pub[1]:.0f} deg off, laboratory data not simulable)",
+    )
     ctx.say(
         f"AOP: our estimates miss the true angles by at most {max(err_ours):.1f} deg "
         f"(top {err_ours[0]:.1f}, bottom {err_ours[1]:.1f}); LeMaster and Cain's published estimates miss "

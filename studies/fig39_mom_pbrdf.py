@@ -24,6 +24,7 @@ Full mode: 100 partitions of 1500 unknowns in each polarization plus 50 of 3000 
 """
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.mom import correlation_length_for_slope, incoherent_scattering, rough_surface
 from scatterlab.pbrdf import PEC, Model
@@ -220,11 +221,24 @@ def run(ctx):
                 f"{v['energy_mean']:.4f} |"
             )
     ctx.say("\n".join(rows))
-    ctx.say(_findings(by_pol, ctx.metrics["grazing_taper_check"], partitions))
+    text, verdict, headline = _findings(by_pol, ctx.metrics["grazing_taper_check"], partitions)
+    set_verdict(ctx, verdict, headline)
+    ctx.say(text)
 
 
 def _findings(by_pol, check, partitions):
-    """The report's text, from the numbers."""
+    """The report's text, the index verdict and the headline, from the numbers.
+
+    Parameters
+    ----------
+    by_pol : dict -- per polarization, per incidence key, the lobe metrics.
+    check : dict -- the grazing taper check per incidence.
+    partitions : int -- Monte-Carlo partitions.
+
+    Returns
+    -------
+    (text, verdict, headline) : tuple of str
+    """
     ms = by_pol["s"]
     graz = [k for k in ms if int(k[8:]) >= 45]
     off_pb = [ms[k]["peak_deg_pbrdf"] - ms[k]["peak_deg_mom"] for k in graz]
@@ -253,7 +267,13 @@ def _findings(by_pol, check, partitions):
         abs(by_pol["s"][k]["peak_height_mom"] / by_pol["p"][k]["peak_height_mom"] - 1) for k in ms
     )
     verdict = "does not reproduce" if max(off_pb) > 5 else "reproduces"
-    return (
+    index_verdict = "reproduced" if max(off_pb) <= 5 else "partly"
+    headline = (
+        f"theta_i >= 45 deg: 2-D pBRDF slice peaks {min(off_pb):.1f}-{max(off_pb):.1f} deg after "
+        f"the MoM (like for unlike); 1-D facet model {min(off_go):+.1f} to {max(off_go):+.1f} deg, "
+        f"RMS log10 {min(lobe_go):.2f}-{max(lobe_go):.2f} absolute"
+    )
+    text = (
         f"The 2-D pBRDF's in-plane slice {verdict} the 1-D MoM at grazing incidence: for theta_i "
         f">= 45 deg its peak sits {min(off_pb):.1f} to {max(off_pb):.1f} deg after the s-pol MoM's, "
         f"and on the back-scatter side (theta_s < -20 deg) it is {min(tails):.1f} to "
@@ -272,3 +292,4 @@ def _findings(by_pol, check, partitions):
         f"{100 * diff:.0f} %. {partitions} partitions; the 2-standard-error bands show the "
         "remaining Monte-Carlo speckle."
     )
+    return text, index_verdict, headline
