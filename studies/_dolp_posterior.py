@@ -14,7 +14,7 @@ from scatterlab.inversion import sample_posterior
 from scatterlab.inversion.model_error import dolp_model_error, dolp_model_error_covariance
 
 LEVELS = (0.68, 0.95)
-FORMS = ("without", "independent", "correlated", "pipeline")
+FORMS = ("without", "independent", "correlated", "pipeline", "independent_rms", "pipeline_rms")
 
 
 def sampler_settings(quick):
@@ -140,7 +140,9 @@ def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executo
     ``covariance = dolp_model_error_covariance(th, th) + noise^2 I``, sigma sampled.
     ``pipeline``: as :func:`scatterlab.characterization.estimation.region_posteriors` with
     ``model_error=True``: sigma known (the cell's slope), material unknown,
-    ``systematic = dolp_model_error(th, th, sigma)``.
+    ``systematic = dolp_model_error(th, th, sigma)``. ``independent_rms`` and ``pipeline_rms``:
+    the same with ``statistic="rms"`` (the error's rms over the heights instead of its largest
+    value).
 
     Parameters
     ----------
@@ -160,6 +162,7 @@ def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executo
     """
     rng = np.random.default_rng(rng)
     t = dolp_model_error(th, th, table=table)
+    t_rms = dolp_model_error(th, th, statistic="rms", table=table)
     C = dolp_model_error_covariance(th, th, table=table)
     hits = {f: {lv: [] for lv in LEVELS} for f in FORMS}
     failed = []
@@ -174,14 +177,16 @@ def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executo
                 y, th, None, rng, executor, quick, covariance=C + noise**2 * np.eye(th.size)
             ),
         }
-        pipe = [None] * y.shape[0]
-        for s in np.unique(sl):
-            rows = np.flatnonzero(sl == s)
-            te = dolp_model_error(th, th, s, table=table)
-            ps = _posteriors(y[rows], th, noise, rng, executor, quick, systematic=te, sigma=s)
-            for r, p in zip(rows, ps):
-                pipe[r] = p
-        posts["pipeline"] = pipe
+        posts["independent_rms"] = _posteriors(y, th, noise, rng, executor, quick, systematic=t_rms)
+        for form, stat in (("pipeline", "max"), ("pipeline_rms", "rms")):
+            pipe = [None] * y.shape[0]
+            for s in np.unique(sl):
+                rows = np.flatnonzero(sl == s)
+                te = dolp_model_error(th, th, s, statistic=stat, table=table)
+                ps = _posteriors(y[rows], th, noise, rng, executor, quick, systematic=te, sigma=s)
+                for r, p in zip(rows, ps):
+                    pipe[r] = p
+            posts[form] = pipe
         failed += [m for ps in posts.values() for m in failures(ps)]
         for f, ps in posts.items():
             for lv in LEVELS:

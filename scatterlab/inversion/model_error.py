@@ -88,8 +88,10 @@ def model_error_table(path=None) -> dict:
     Returns
     -------
     dict with ``materials`` (K,) names, ``eta`` (K,) complex, ``slopes`` (L,), ``theta_i`` (I,)
-    [rad], ``theta_s`` (S,) [rad, signed: negative is backward], ``error`` (K, L, I, S) DOLP rms
-    model error (finite, >= 0), and the run's ``realizations``, ``length`` [wavelengths].
+    [rad], ``theta_s`` (S,) [rad, signed: negative is backward], ``error`` (K, L, I, S) the
+    largest absolute DOLP model error over the simulated heights and ``error_rms`` (K, L, I, S)
+    its root mean square over them (finite, >= 0), and the run's ``realizations``, ``length``
+    [wavelengths].
     """
     p = Path(TABLE_PATH if path is None else path)
     if not p.exists():
@@ -116,7 +118,9 @@ def _nearest_material(eta, table_eta):
     return np.argmin(d, -1)
 
 
-def dolp_model_error(theta_i, theta_r, sigma=None, eta=None, *, phi=np.pi, table=None):
+def dolp_model_error(
+    theta_i, theta_r, sigma=None, eta=None, *, phi=np.pi, statistic="max", table=None
+):
     r"""Systematic DOLP error standard deviation of the pBRDF at the given geometries.
 
     Parameters
@@ -128,6 +132,11 @@ def dolp_model_error(theta_i, theta_r, sigma=None, eta=None, *, phi=np.pi, table
         in :math:`\log\eta`; None takes the largest error over the materials.
     phi : float or array_like [rad] -- ``pi`` (forward, the specular plane) or ``0`` (backward);
         out-of-plane geometries are not tabulated (ValueError).
+    statistic : {"max", "rms"} -- over the simulated height-to-wavelength ratios at each slope:
+        ``"max"`` (default) the largest error, a bound whose intervals over-cover (conservative);
+        ``"rms"`` their root mean square, the spread of the error over an unknown height, whose
+        intervals cover at about the nominal rate pooled over heights and materials (measured
+        in the module docstring), less for the worst height.
     table : dict, optional -- from :func:`model_error_table` (default the shipped table).
 
     Returns
@@ -145,7 +154,12 @@ def dolp_model_error(theta_i, theta_r, sigma=None, eta=None, *, phi=np.pi, table
     back = np.isclose(ph, 0.0) | np.isclose(ph, 2 * np.pi)
     if not np.all(back | np.isclose(ph, np.pi)):
         raise ValueError("phi must be pi (forward) or 0 (backward): the table is in-plane only")
-    err = np.asarray(t["error"], float)  # (K, L, I, S)
+    if statistic not in ("max", "rms"):
+        raise ValueError(f"statistic must be 'max' or 'rms', got {statistic!r}")
+    key = "error" if statistic == "max" else "error_rms"
+    if key not in t:
+        raise ValueError("statistic 'rms' needs a table with 'error_rms' (rerun dolp_vs_mom)")
+    err = np.asarray(t[key], float)  # (K, L, I, S)
     if eta is not None:
         k = _nearest_material(as_index(eta), np.asarray(t["eta"]))
     if sigma is not None:
@@ -176,7 +190,15 @@ def dolp_model_error(theta_i, theta_r, sigma=None, eta=None, *, phi=np.pi, table
 
 
 def dolp_model_error_covariance(
-    theta_i, theta_r, sigma=None, eta=None, *, phi=np.pi, correlation=np.radians(20.0), table=None
+    theta_i,
+    theta_r,
+    sigma=None,
+    eta=None,
+    *,
+    phi=np.pi,
+    correlation=np.radians(20.0),
+    statistic="max",
+    table=None,
 ):
     r"""Covariance (M, M) of the model error across M geometries.
 
@@ -190,7 +212,8 @@ def dolp_model_error_covariance(
     Parameters
     ----------
     theta_i, theta_r : array_like (M,) [rad]
-    sigma, eta, phi, table : as :func:`dolp_model_error` (scalars for ``sigma`` and ``eta``).
+    sigma, eta, phi, statistic, table : as :func:`dolp_model_error` (scalars for ``sigma`` and
+        ``eta``).
     correlation : float [rad] -- correlation angle c (> 0), default 20 deg.
 
     Returns
@@ -204,6 +227,6 @@ def dolp_model_error_covariance(
     ti, tr = np.broadcast_arrays(ti, tr)
     if ti.ndim != 1:
         raise ValueError("theta_i and theta_r must be 1-D arrays (M,) of geometries")
-    t = dolp_model_error(ti, tr, sigma, eta, phi=phi, table=table)
+    t = dolp_model_error(ti, tr, sigma, eta, phi=phi, statistic=statistic, table=table)
     d2 = (ti[:, None] - ti[None, :]) ** 2 + (tr[:, None] - tr[None, :]) ** 2
     return t[:, None] * t[None, :] * np.exp(-d2 / (2 * correlation**2))

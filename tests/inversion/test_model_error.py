@@ -54,6 +54,22 @@ def test_table_nodes_are_reproduced_and_outside_is_clamped():
     assert lo == pytest.approx(edge, rel=1e-12)
 
 
+def test_rms_over_heights_lies_between_the_largest_and_the_largest_over_root_h():
+    """The rms of H values lies in [max / sqrt(H), max]; the study simulates at most 3 heights
+    per slope (its CELLS), so the two tabulated statistics must obey that on every entry."""
+    t = model_error_table()
+    mx, rms = t["error"], t["error_rms"]
+    assert rms.shape == mx.shape and np.all(np.isfinite(rms)) and np.all(rms >= 0)
+    assert np.all(rms <= mx * (1 + 1e-12))
+    assert np.all(rms >= mx / np.sqrt(3) * (1 - 1e-12))
+    for s in t["slopes"]:
+        r = dolp_model_error(TH, TH, s, 3.6 - 5.88j, statistic="rms")
+        m = dolp_model_error(TH, TH, s, 3.6 - 5.88j)
+        assert np.all(r <= m * (1 + 1e-12)) and np.all(r > 0)
+    C = dolp_model_error_covariance(TH, TH, 0.3, statistic="rms")
+    assert np.allclose(np.diag(C), dolp_model_error(TH, TH, 0.3, statistic="rms") ** 2)
+
+
 def test_covariance_is_symmetric_psd_with_the_variances_on_its_diagonal():
     C = dolp_model_error_covariance(TH, TH, 0.3, 3.6 - 5.88j)
     t = dolp_model_error(TH, TH, 0.3, 3.6 - 5.88j)
@@ -70,6 +86,8 @@ def test_bad_input():
         dolp_model_error(0.3, 0.3, -1.0)
     with pytest.raises(ValueError, match="eta"):
         dolp_model_error(0.3, 0.3, 0.3, 1.5 + 0.1j)
+    with pytest.raises(ValueError, match="statistic"):
+        dolp_model_error(0.3, 0.3, 0.3, statistic="mean")
     with pytest.raises(ValueError, match="correlation"):
         dolp_model_error_covariance(TH, TH, 0.3, correlation=0.0)
 
