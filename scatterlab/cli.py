@@ -7,7 +7,7 @@
     scatterlab study run all [--quick] [--out DIR]
     scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
     scatterlab analyze DATASET [--out DIR] [--force] [--psf blind|diffraction] [--iterations N]
-                     [--classes adaptive|priors] [--bias-samples N]
+                     [--classes adaptive|priors] [--bias-samples N] [--model-error]
     scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--time-convention exp(-iwt)]
 
 Sweeps inside studies use ``--workers N`` local processes or a Dask cluster
@@ -159,6 +159,7 @@ def _analyze(args) -> int:
         seed=args.seed,
         classes=args.classes,
         bias_samples=args.bias_samples,
+        model_error=args.model_error,
     )
     return _report(
         args,
@@ -349,6 +350,11 @@ def main(argv=None) -> int:
         type=int,
         default=3,
         help="blind re-simulations averaged by the self-calibration (default 3, >= 1)",
+    )
+    an.add_argument(
+        "--model-error",
+        action="store_true",
+        help="add the pBRDF's MoM-measured DOLP model error to the region errors (real data)",
     )
     an.add_argument(
         "--sigma", type=float, default=0.3, help="known roughness (rms facet slope, default 0.3)"

@@ -14,7 +14,15 @@ from scatterlab.inversion import sample_posterior
 from scatterlab.inversion.model_error import dolp_model_error, dolp_model_error_covariance
 
 LEVELS = (0.68, 0.95)
-FORMS = ("without", "independent", "correlated", "pipeline", "independent_rms", "pipeline_rms")
+FORMS = (
+    "without",
+    "independent",
+    "correlated",
+    "pipeline",
+    "pipeline_any_material",
+    "pipeline_rms",
+)
+CLASS = {"glass": "dielectric", "paint": "dielectric", "iron": "metal", "aluminium": "metal"}
 
 
 def sampler_settings(quick):
@@ -131,7 +139,7 @@ def covered(posts, truth, level):
     return np.all((lo <= truth) & (truth <= hi), -1)
 
 
-def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executor, quick):
+def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executor, quick, name):
     """Coverage of the true (n, kappa) by the posterior's 68 % and 95 % intervals on held-out
     exact DOLP plus noise, for four error models.
 
@@ -139,10 +147,12 @@ def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executo
     and roughness unknown: the largest tabulated error), sigma sampled. ``correlated``:
     ``covariance = dolp_model_error_covariance(th, th) + noise^2 I``, sigma sampled.
     ``pipeline``: as :func:`scatterlab.characterization.estimation.region_posteriors` with
-    ``model_error=True``: sigma known (the cell's slope), material unknown,
-    ``systematic = dolp_model_error(th, th, sigma)``. ``independent_rms`` and ``pipeline_rms``:
-    the same with ``statistic="rms"`` (the error's rms over the heights instead of its largest
-    value).
+    ``model_error=True``: sigma known (the cell's slope), the material's class known (the
+    pipeline's classification), ``systematic = dolp_model_error(th, th, sigma,
+    material_class=...)``. ``pipeline_any_material``: the same with the class unknown (the largest
+    error over all materials; the pipeline's form before the class was used).
+    ``pipeline_rms``: as ``pipeline`` with the table's rms over the heights (``error_rms``)
+    instead of their largest error.
 
     Parameters
     ----------
@@ -154,6 +164,7 @@ def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executo
     draws : int -- noise draws per cell and noise level.
     table : dict -- the model-error table (from the other half of the realizations).
     rng, executor, quick : as :func:`posterior_bias`.
+    name : str -- the material (a key of :data:`CLASS`), whose class the pipeline knows.
 
     Returns
     -------
@@ -162,7 +173,6 @@ def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executo
     """
     rng = np.random.default_rng(rng)
     t = dolp_model_error(th, th, table=table)
-    t_rms = dolp_model_error(th, th, statistic="rms", table=table)
     C = dolp_model_error_covariance(th, th, table=table)
     hits = {f: {lv: [] for lv in LEVELS} for f in FORMS}
     failed = []
@@ -177,12 +187,16 @@ def posterior_coverage(d0, truth, slopes, th, noises, draws, table, rng, executo
                 y, th, None, rng, executor, quick, covariance=C + noise**2 * np.eye(th.size)
             ),
         }
-        posts["independent_rms"] = _posteriors(y, th, noise, rng, executor, quick, systematic=t_rms)
-        for form, stat in (("pipeline", "max"), ("pipeline_rms", "rms")):
+        rms = dict(table, error=table["error_rms"])
+        for form, cls, tab in (
+            ("pipeline", CLASS[name], table),
+            ("pipeline_any_material", None, table),
+            ("pipeline_rms", CLASS[name], rms),
+        ):
             pipe = [None] * y.shape[0]
             for s in np.unique(sl):
                 rows = np.flatnonzero(sl == s)
-                te = dolp_model_error(th, th, s, statistic=stat, table=table)
+                te = dolp_model_error(th, th, s, material_class=cls, table=tab)
                 ps = _posteriors(y[rows], th, noise, rng, executor, quick, systematic=te, sigma=s)
                 for r, p in zip(rows, ps):
                     pipe[r] = p

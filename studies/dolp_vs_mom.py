@@ -436,7 +436,17 @@ def posterior_inversion(ctx, res, res_b, table, cell_list, theta_i, draws):
         bias[name] = posterior_bias(data, truth, th, noises, ctx.rng, ctx.executor, ctx.quick)
         d0 = np.array([res_b[name, c]["exact_spec"][idx] for c in cell_list])
         cover[name] = posterior_coverage(
-            d0, truth[0, :2], slopes, th, noises, draws, table, ctx.rng, ctx.executor, ctx.quick
+            d0,
+            truth[0, :2],
+            slopes,
+            th,
+            noises,
+            draws,
+            table,
+            ctx.rng,
+            ctx.executor,
+            ctx.quick,
+            name,
         )
     return bias, cover
 
@@ -1177,9 +1187,11 @@ def _report_posterior(ctx, pbias, pcover, cell_list):
         "realizations plus noise, per error model: without the term; independent "
         "(systematic = dolp_model_error(th, th), sigma sampled); correlated (covariance = "
         "dolp_model_error_covariance(th, th) + noise^2 I); pipeline (region_posteriors with "
-        "model_error=True: sigma known, systematic = dolp_model_error(th, th, sigma)); the "
-        "same two with statistic='rms' (the error's rms over the simulated heights instead of "
-        "its largest value):\n\n"
+        "model_error=True: sigma known, the material's class known from the classification, "
+        "systematic = dolp_model_error(th, th, sigma, material_class=...)); "
+        "pipeline_any_material (the same, class unknown: the largest error over all "
+        "materials); pipeline_rms (as pipeline with the rms over the simulated heights instead "
+        "of the largest error):\n\n"
         "| error model | 68 % | 95 % | per material 68 / 95 % |\n|---|---|---|---|\n"
         + "\n".join(rows)
     )

@@ -294,8 +294,11 @@ def region_posteriors(
         Runs the regions in parallel.
     model_error : bool
         Add the pBRDF's DOLP model error measured against exact (MoM) solutions
-        (:func:`scatterlab.inversion.dolp_model_error` at the known ``sigma``, material unknown) to each
-        geometry's error. Right for measured data; a simulation rendered with the pBRDF itself has none.
+        (:func:`scatterlab.inversion.dolp_model_error` at the known ``sigma``, for the region's class
+        from the classification: "metal" for the region named ``metal``, "dielectric" otherwise) to
+        each geometry's error. Right for measured data; a simulation rendered with the pBRDF itself
+        has none. On held-out exact solutions this form covered the truth at 69 % / 98 % (68 % / 95 %
+        intervals; study ``dolp_vs_mom``).
 
     Returns
     -------
@@ -309,7 +312,9 @@ def region_posteriors(
     if model_error:
         from scatterlab.inversion import dolp_model_error
 
-        errors = np.hypot(errors, dolp_model_error(thetas, thetas, sigma)[None, :])
+        classes = ["metal" if r.name == "metal" else "dielectric" for r in regions]
+        model = [dolp_model_error(thetas, thetas, sigma, material_class=c) for c in classes]
+        errors = np.hypot(errors, np.stack(model))
     kw = dict(sigma=sigma, n_steps=n_steps, executor=executor)
     noise = None
     if thetas.size < 3:  # (n, kappa) from two geometries: no data left to infer a noise level

@@ -89,9 +89,10 @@ def model_error_table(path=None) -> dict:
     -------
     dict with ``materials`` (K,) names, ``eta`` (K,) complex, ``slopes`` (L,), ``theta_i`` (I,)
     [rad], ``theta_s`` (S,) [rad, signed: negative is backward], ``error`` (K, L, I, S) the
-    largest absolute DOLP model error over the simulated heights and ``error_rms`` (K, L, I, S)
-    its root mean square over them (finite, >= 0), and the run's ``realizations``, ``length``
-    [wavelengths].
+    largest absolute DOLP model error over the simulated heights (what :func:`dolp_model_error`
+    uses), ``error_rms`` (K, L, I, S) its root mean square over them (for reference: intervals
+    built on it under-cover the metals, see the module docstring), both finite and >= 0, and the
+    run's ``realizations``, ``length`` [wavelengths].
     """
     p = Path(TABLE_PATH if path is None else path)
     if not p.exists():
@@ -118,8 +119,22 @@ def _nearest_material(eta, table_eta):
     return np.argmin(d, -1)
 
 
+def _class_members(material_class, table_eta):
+    """Indices of the tabulated materials of ``material_class`` (metal: n < kappa, i.e. a
+    negative real part of the permittivity n^2 - kappa^2)."""
+    if material_class not in ("dielectric", "metal"):
+        raise ValueError(
+            f"material_class must be 'dielectric', 'metal' or None, got {material_class!r}"
+        )
+    metal = table_eta.real < -table_eta.imag
+    members = np.flatnonzero(metal if material_class == "metal" else ~metal)
+    if members.size == 0:
+        raise ValueError(f"the model-error table holds no {material_class}")
+    return members
+
+
 def dolp_model_error(
-    theta_i, theta_r, sigma=None, eta=None, *, phi=np.pi, statistic="max", table=None
+    theta_i, theta_r, sigma=None, eta=None, *, material_class=None, phi=np.pi, table=None
 ):
     r"""Systematic DOLP error standard deviation of the pBRDF at the given geometries.
 
@@ -129,14 +144,14 @@ def dolp_model_error(
     sigma : array_like, optional -- rms facet slope; None takes the largest error over the
         tabulated slopes (roughness unknown). Clamped to the tabulated 0.1-0.6.
     eta : complex array_like, optional -- index ``n - 1j*kappa``: the nearest tabulated material
-        in :math:`\log\eta`; None takes the largest error over the materials.
+        in :math:`\log\eta`; None takes the largest error over the materials (of
+        ``material_class`` when given).
+    material_class : {"dielectric", "metal"}, optional -- the material's class when known but not
+        its index (the characterization pipeline's classification): the largest error over the
+        tabulated materials of that class (metal: negative real permittivity,
+        :math:`n < \kappa`). Only without ``eta``.
     phi : float or array_like [rad] -- ``pi`` (forward, the specular plane) or ``0`` (backward);
         out-of-plane geometries are not tabulated (ValueError).
-    statistic : {"max", "rms"} -- over the simulated height-to-wavelength ratios at each slope:
-        ``"max"`` (default) the largest error, a bound whose intervals over-cover (conservative);
-        ``"rms"`` their root mean square, the spread of the error over an unknown height, whose
-        intervals cover at about the nominal rate pooled over heights and materials (measured
-        in the module docstring), less for the worst height.
     table : dict, optional -- from :func:`model_error_table` (default the shipped table).
 
     Returns
@@ -154,12 +169,11 @@ def dolp_model_error(
     back = np.isclose(ph, 0.0) | np.isclose(ph, 2 * np.pi)
     if not np.all(back | np.isclose(ph, np.pi)):
         raise ValueError("phi must be pi (forward) or 0 (backward): the table is in-plane only")
-    if statistic not in ("max", "rms"):
-        raise ValueError(f"statistic must be 'max' or 'rms', got {statistic!r}")
-    key = "error" if statistic == "max" else "error_rms"
-    if key not in t:
-        raise ValueError("statistic 'rms' needs a table with 'error_rms' (rerun dolp_vs_mom)")
-    err = np.asarray(t[key], float)  # (K, L, I, S)
+    err = np.asarray(t["error"], float)  # (K, L, I, S)
+    if material_class is not None:
+        if eta is not None:
+            raise ValueError("give eta or material_class, not both")
+        err = err[_class_members(material_class, np.asarray(t["eta"]))]
     if eta is not None:
         k = _nearest_material(as_index(eta), np.asarray(t["eta"]))
     if sigma is not None:
@@ -195,9 +209,9 @@ def dolp_model_error_covariance(
     sigma=None,
     eta=None,
     *,
+    material_class=None,
     phi=np.pi,
     correlation=np.radians(20.0),
-    statistic="max",
     table=None,
 ):
     r"""Covariance (M, M) of the model error across M geometries.
@@ -212,8 +226,8 @@ def dolp_model_error_covariance(
     Parameters
     ----------
     theta_i, theta_r : array_like (M,) [rad]
-    sigma, eta, phi, statistic, table : as :func:`dolp_model_error` (scalars for ``sigma`` and
-        ``eta``).
+    sigma, eta, material_class, phi, table : as :func:`dolp_model_error` (scalars for
+        ``sigma`` and ``eta``).
     correlation : float [rad] -- correlation angle c (> 0), default 20 deg.
 
     Returns
@@ -227,6 +241,6 @@ def dolp_model_error_covariance(
     ti, tr = np.broadcast_arrays(ti, tr)
     if ti.ndim != 1:
         raise ValueError("theta_i and theta_r must be 1-D arrays (M,) of geometries")
-    t = dolp_model_error(ti, tr, sigma, eta, phi=phi, statistic=statistic, table=table)
+    t = dolp_model_error(ti, tr, sigma, eta, material_class=material_class, phi=phi, table=table)
     d2 = (ti[:, None] - ti[None, :]) ** 2 + (tr[:, None] - tr[None, :]) ** 2
     return t[:, None] * t[None, :] * np.exp(-d2 / (2 * correlation**2))

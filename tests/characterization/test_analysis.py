@@ -66,6 +66,8 @@ def test_analyze_cli_reads_a_tiff_stack_with_its_sidecar_and_names_wrong_files(t
     assert "bias_samples must be in [1, 20]" in capsys.readouterr().err
     with pytest.raises(SystemExit):  # argparse: not one of the choices
         main(["analyze", h5, "--out", str(tmp_path / "e"), "--classes", "kmeans"])
+    with pytest.raises(ValueError, match="model_error must be True or False"):
+        AnalyzeSettings(model_error="yes").validate()
 
 
 def test_analyze_with_the_known_diffraction_psf_recovers_the_paint(tmp_path):

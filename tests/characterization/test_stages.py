@@ -278,3 +278,34 @@ def test_ratio_correction_scales_the_data_error_with_the_mean():
     np.testing.assert_allclose(c.statistical, stat / ratio)
     shift = r.mean - r.mean / ratio  # the equivalent bias, half of it kept
     np.testing.assert_allclose(c.error, np.sqrt((r.error / ratio) ** 2 + (0.5 * shift) ** 2))
+
+
+def test_model_error_is_chosen_by_the_regions_class(monkeypatch):
+    """With ``model_error=True`` each region's error gains the model error of its class from the
+    classification (the region named "metal": metal; any other: dielectric), added in quadrature;
+    the class-aware form is the one whose coverage the study dolp_vs_mom measured."""
+    import scatterlab.inversion as inv
+    from scatterlab.characterization.estimation import RegionData, region_posteriors
+    from scatterlab.inversion import dolp_model_error
+
+    seen = {}
+
+    class Stop(Exception):
+        pass
+
+    def fake(dolp, theta_i, theta_r, noise=None, rng=None, *, systematic=None, **kw):
+        seen["systematic"] = np.asarray(systematic)
+        raise Stop
+
+    monkeypatch.setattr(inv, "sample_posteriors", fake)
+    th = np.radians([30.0, 40.0, 50.0, 60.0])
+    err = np.full(4, 0.01)
+    regions = [
+        RegionData(name, np.full(4, 0.3), err, err, 0 * err, 100) for name in ("paint", "metal")
+    ]
+    with pytest.raises(Stop):
+        region_posteriors(regions, th, 0.3, np.random.default_rng(0), model_error=True)
+    for row, cls in zip(seen["systematic"], ("dielectric", "metal")):
+        want = np.hypot(err, dolp_model_error(th, th, 0.3, material_class=cls))
+        np.testing.assert_allclose(row, want, rtol=1e-12)
+    assert not np.allclose(seen["systematic"][0], seen["systematic"][1])

@@ -62,12 +62,24 @@ def test_rms_over_heights_lies_between_the_largest_and_the_largest_over_root_h()
     assert rms.shape == mx.shape and np.all(np.isfinite(rms)) and np.all(rms >= 0)
     assert np.all(rms <= mx * (1 + 1e-12))
     assert np.all(rms >= mx / np.sqrt(3) * (1 - 1e-12))
+
+
+def test_a_known_class_takes_the_largest_error_over_its_own_materials():
+    """Metal means n < kappa (negative real permittivity): iron and aluminium; dielectric: glass
+    and paint. The class's term is the largest over exactly those, and never above the term for
+    an unknown material."""
+    t = model_error_table()
+    metal = [e for e in t["eta"] if e.real < -e.imag]
+    dielectric = [e for e in t["eta"] if e.real >= -e.imag]
+    assert len(metal) == 2 and len(dielectric) == 2
     for s in t["slopes"]:
-        r = dolp_model_error(TH, TH, s, 3.6 - 5.88j, statistic="rms")
-        m = dolp_model_error(TH, TH, s, 3.6 - 5.88j)
-        assert np.all(r <= m * (1 + 1e-12)) and np.all(r > 0)
-    C = dolp_model_error_covariance(TH, TH, 0.3, statistic="rms")
-    assert np.allclose(np.diag(C), dolp_model_error(TH, TH, 0.3, statistic="rms") ** 2)
+        for cls, members in (("metal", metal), ("dielectric", dielectric)):
+            got = dolp_model_error(TH, TH, s, material_class=cls)
+            want = np.max([dolp_model_error(TH, TH, s, e) for e in members], 0)
+            np.testing.assert_allclose(got, want, rtol=1e-12)
+            assert np.all(got <= dolp_model_error(TH, TH, s) + 1e-15)
+    C = dolp_model_error_covariance(TH, TH, 0.3, material_class="metal")
+    assert np.allclose(np.diag(C), dolp_model_error(TH, TH, 0.3, material_class="metal") ** 2)
 
 
 def test_covariance_is_symmetric_psd_with_the_variances_on_its_diagonal():
@@ -86,8 +98,10 @@ def test_bad_input():
         dolp_model_error(0.3, 0.3, -1.0)
     with pytest.raises(ValueError, match="eta"):
         dolp_model_error(0.3, 0.3, 0.3, 1.5 + 0.1j)
-    with pytest.raises(ValueError, match="statistic"):
-        dolp_model_error(0.3, 0.3, 0.3, statistic="mean")
+    with pytest.raises(ValueError, match="material_class"):
+        dolp_model_error(0.3, 0.3, 0.3, material_class="semiconductor")
+    with pytest.raises(ValueError, match="not both"):
+        dolp_model_error(0.3, 0.3, 0.3, 1.5, material_class="dielectric")
     with pytest.raises(ValueError, match="correlation"):
         dolp_model_error_covariance(TH, TH, 0.3, correlation=0.0)
 
