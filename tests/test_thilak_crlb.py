@@ -150,3 +150,14 @@ def test_published_plus_minus_is_the_95_percent_half_width_of_the_mean():
                 sd = p["se_mean"] * np.sqrt(TT.LEVELS[level][1])
                 rmse = np.hypot(p["mean"] - truth, sd)
                 assert rmse == pytest.approx(p["rmse"], rel=0.07), (level, key, par)
+
+
+def test_step_two_start_is_honoured_and_validated():
+    # hand case: clean data, step 2 started 10 deg away still returns the true theta_r
+    y = thilak_dop(*COPPER, (TI10 + TR) / 2)
+    fit = thilak_two_step(y, TI10, TR, np.random.default_rng(0), theta_r_start=np.radians(50))
+    assert fit.theta_r[0] == pytest.approx(TR, abs=1e-7)
+    with pytest.raises(ValueError, match="theta_r_start"):
+        thilak_two_step(y, TI10, TR, np.random.default_rng(0), theta_r_start="fixed")
+    with pytest.raises(ValueError, match="theta_r_start"):
+        thilak_two_step(y, TI10, TR, np.random.default_rng(0), theta_r_start=2.0)

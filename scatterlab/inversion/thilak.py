@@ -105,14 +105,14 @@ def _minimise(resid, x0, solver, bounds, tol, max_nfev):
     return optimize.least_squares(resid, x0, method=solver, max_nfev=max_nfev, **kw).x
 
 
-def _two_step_row(row, ti, tr0, x0, opts):
-    """Eqs. 116-117 for one trial from the start ``x0`` -> (n, kappa, theta_r)."""
+def _two_step_row(row, ti, tr0, x0, opts, tr_start):
+    """Eqs. 116-117 for one trial from the start ``x0`` (step 2 from ``tr_start``)."""
     solver, bounds, tol, max_nfev = opts
     beta = (ti + tr0) / 2
     n, kap = _minimise(lambda p: thilak_dop(p[0], p[1], beta) - row, x0, *opts)
     step2 = (np.array([0.0]), np.array([np.pi / 2])) if bounds is not None else None
     (t_r,) = _minimise(
-        lambda t: thilak_dop(n, kap, (ti + t[0]) / 2) - row, np.array([tr0]), solver, step2,
+        lambda t: thilak_dop(n, kap, (ti + t[0]) / 2) - row, np.array([tr_start]), solver, step2,
         tol, max_nfev,
     )  # fmt: skip
     return n, kap, t_r
@@ -130,6 +130,7 @@ def thilak_two_step(
     bounds=None,
     tol: float | None = None,
     max_nfev: int | None = None,
+    theta_r_start=None,
 ) -> ThilakFit:
     """Thilak et al.'s two-step method for each row of ``dop`` (K, M) measured at ``theta_i`` (M,).
 
@@ -158,6 +159,9 @@ def thilak_two_step(
     max_nfev : int or None
         Function evaluations per fit (None: scipy's default; MATLAB's ``lsqnonlin`` stops at
         ``100 * 2``, ``fminsearch`` at ``200 * 2`` for two unknowns).
+    theta_r_start : float [rad], "random" or None
+        Start of step 2: None for ``theta_r_nominal``; "random" draws it uniformly in
+        (0, 90) deg with ``rng`` for every attempt.
 
     Returns
     -------
@@ -175,12 +179,18 @@ def thilak_two_step(
             "theta_i must hold at least 3 measurements (Eq. 116 has two unknowns plus theta_r)"
         )
     opts = (solver, _check_options(solver, bounds, tol, max_nfev), tol, max_nfev)
+    if isinstance(theta_r_start, str) and theta_r_start != "random":
+        raise ValueError(f"theta_r_start must be an angle, 'random' or None, got {theta_r_start!r}")
+    if theta_r_start is not None and theta_r_start != "random":
+        theta_r_start = float(as_angle(theta_r_start, "theta_r_start"))
     out = np.full((y.shape[0], 3), np.nan)
     restarts = np.zeros(y.shape[0], int)
     for k, row in enumerate(y):
         x0 = np.array(start, float)
         for _ in range(max_restarts + 1):
-            n, kap, t_r = _two_step_row(row, ti, tr0, x0, opts)
+            t2 = tr0 if theta_r_start is None else theta_r_start
+            t2 = rng.uniform(0, np.pi / 2) if t2 == "random" else t2
+            n, kap, t_r = _two_step_row(row, ti, tr0, x0, opts, t2)
             if n >= 0 and kap >= 0 and 0 < t_r < np.pi / 2:
                 out[k] = n, kap, t_r
                 break
