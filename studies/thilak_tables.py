@@ -31,11 +31,11 @@ default adaptive run) against the grid's quantiles; and the coverage with truths
 prior, where Bayesian intervals must cover 68 %.
 
 Run time: quick (24 trials per case, 6 per candidate procedure and row) 22-24 s measured on the
-2-core machine at load 0.4-4 (56 s at load ~5, beside a full run of this study); full (500/200 trials, 150 per candidate
-procedure and row, with the adaptive-sampler check): 481 s at load 2-3 (the candidate procedures
-take 296 s of it, fminsearch 79 s). Which of the three or four closest procedures comes first
-changes with the random stream (the box n <= 10 scored 1.35 and 1.21 in two full runs), so the
-report names every procedure within 10 % of the closest.
+2-core machine at load 0.4-4 (56 s at load ~5, beside a full run of this study); full (500/200
+trials, 150 per candidate procedure and row, with the adaptive-sampler check): 481 s at load 2-3
+(the candidate procedures take 296 s of it, fminsearch 79 s). Which of the three or four
+closest procedures comes first changes with the random stream (the box n <= 10 scored 1.35 and
+1.21 in two full runs), so the report names every procedure within 10 % of the closest.
 """
 
 import time
@@ -413,7 +413,8 @@ def run(ctx):
     ctx.metrics["comparisons"] = cmp
     ratio_n = [r["thilak"]["n"]["mean"] / r["published"]["n"] for _, _, r in rows]
     kbias = [
-        (np.sign(r["thilak"]["kappa"]["median"] - COPPER[1]), np.sign(r["published"]["kappa"] - COPPER[1]))
+        (np.sign(r["thilak"]["kappa"]["median"] - COPPER[1]),
+         np.sign(r["published"]["kappa"] - COPPER[1]))
         for _, _, r in rows
     ]  # fmt: skip
     run_frac = [r["thilak"]["runaway_fraction_n_gt_10"] for _, _, r in rows]

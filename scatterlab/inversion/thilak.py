@@ -11,7 +11,10 @@ Step 1 (Eq. 116): unconstrained nonlinear least squares (Levenberg-Marquardt) of
 :math:`\beta_j` from the nominal theta_r. Step 2 (Eq. 117): with (n, kappa) fixed, least squares of theta_r.
 As the authors did, a solution outside the physical range (n or kappa < 0, theta_r outside (0, 90) deg) is
 discarded and the fit restarted (from a random start drawn with ``rng``); after ``max_restarts`` the trial is
-reported as failed (NaN).
+reported as failed (NaN). The text does not give the rest of the procedure, so the solver (LM,
+trust-region reflective with an optional box, Nelder-Mead), its tolerances and evaluation limit,
+and the start of step 2 are options (``studies/thilak_tables.py`` measures them against Tables
+1-2). :func:`thilak_crlb` gives the Cramer-Rao bounds of (n, kappa, theta_r) for a design.
 """
 
 from __future__ import annotations
