@@ -35,7 +35,9 @@ Run time: quick (24 trials per case, 6 per candidate procedure and row) 22-24 s 
 trials, 150 per candidate procedure and row, with the adaptive-sampler check): 481 s at load 2-3
 (the candidate procedures take 296 s of it, fminsearch 79 s). Which of the three or four
 closest procedures comes first changes with the random stream (the box n <= 10 scored 1.35 and
-1.21 in two full runs), so the report names every procedure within 10 % of the closest.
+1.21 in two full runs), so the report names every procedure within 10 % of the closest. The
+verdict is "partly" when the closest procedure reproduces the tables in kind (n and kappa biased
+high in every row, typical factor at most 1.5) but not number for number.
 """
 
 import time
@@ -469,9 +471,15 @@ def run(ctx):
     _explain_old_coverage(ctx, rows)
     sb = scored[best]
     n_in, n_all = sb["inside_nk"] + sb["inside_theta"], sb["total_nk"] + sb["total_theta"]
+    # "partly": reproduced in kind -- the bias of n and kappa in the published direction in every
+    # row and within a typical factor 1.5 (stable across random streams, unlike the count inside)
+    in_kind = sb["factor"] <= 1.5 and all(
+        r["n"]["mean"] > COPPER[0] and r["kappa"]["mean"] > COPPER[1]
+        for r in sb["results"].values()
+    )
     set_verdict(
         ctx,
-        "reproduced" if n_in == n_all else "partly" if 2 * n_in >= n_all else "not reproduced",
+        "reproduced" if n_in == n_all else "partly" if in_kind else "not reproduced",
         f"closest procedure ({best}): n, kappa typically {sb['factor']:.2f} x published, "
         f"{n_in}/{n_all} numbers inside 2 sigma (unconstrained LM: mean n "
         f"{min(ratio_n):.1f}-{max(ratio_n):.1f} x published); 68 % coverage HPD "
