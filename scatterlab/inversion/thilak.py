@@ -11,7 +11,10 @@ Step 1 (Eq. 116): unconstrained nonlinear least squares (Levenberg-Marquardt) of
 :math:`\beta_j` from the nominal theta_r. Step 2 (Eq. 117): with (n, kappa) fixed, least squares of theta_r.
 As the authors did, a solution outside the physical range (n or kappa < 0, theta_r outside (0, 90) deg) is
 discarded and the fit restarted (from a random start drawn with ``rng``); after ``max_restarts`` the trial is
-reported as failed (NaN).
+reported as failed (NaN). The text does not give the rest of the procedure, so the solver (LM,
+trust-region reflective with an optional box, Nelder-Mead), its tolerances and evaluation limit,
+and the start of step 2 are options (``studies/thilak_tables.py`` measures them against Tables
+1-2). :func:`thilak_crlb` gives the Cramer-Rao bounds of (n, kappa, theta_r) for a design.
 """
 
 from __future__ import annotations
@@ -23,8 +26,9 @@ from scipy import optimize
 
 from scatterlab._checks import ETA_MIN, as_angle
 from scatterlab.fresnel import smooth_dolp
+from scatterlab.inversion.design import inverse_information
 
-__all__ = ["thilak_dop", "thilak_two_step", "ThilakFit"]
+__all__ = ["thilak_dop", "thilak_two_step", "ThilakFit", "thilak_jacobian", "thilak_crlb"]
 
 
 def thilak_dop(n, kappa, beta) -> np.ndarray:
@@ -67,8 +71,69 @@ class ThilakFit:
     ok: np.ndarray
 
 
+SOLVERS = ("lm", "trf", "nelder-mead")
+
+
+def _check_options(solver, bounds, tol, max_nfev):
+    """Validate the solver options of :func:`thilak_two_step`; returns ``bounds`` as arrays."""
+    if solver not in SOLVERS:
+        raise ValueError(f"solver must be one of {SOLVERS}, got {solver!r}")
+    if bounds is not None:
+        lo, hi = np.asarray(bounds, float).T
+        if solver != "trf" or lo.shape != (2,) or np.any(lo < 0) or np.any(hi <= lo):
+            raise ValueError(
+                "bounds must be ((n_lo, n_hi), (kappa_lo, kappa_hi)) with 0 <= lo < hi, "
+                "and need solver='trf'"
+            )
+        bounds = (lo, hi)
+    if tol is not None and not 0 < tol < 1:
+        raise ValueError(f"tol must be in (0, 1), got {tol}")
+    if max_nfev is not None and max_nfev < 1:
+        raise ValueError(f"max_nfev must be a positive integer, got {max_nfev}")
+    return bounds
+
+
+def _minimise(resid, x0, solver, bounds, tol, max_nfev):
+    """Least squares of ``resid`` from ``x0`` with one of :data:`SOLVERS` -> the solution."""
+    if solver == "nelder-mead":
+        opts = {"xatol": tol or 1e-4, "fatol": tol or 1e-4, "maxfev": max_nfev or 200 * len(x0)}
+        r = optimize.minimize(
+            lambda p: float(np.sum(resid(p) ** 2)), x0, method="Nelder-Mead", options=opts
+        )
+        return r.x
+    kw = {"ftol": tol, "xtol": tol, "gtol": tol} if tol else {}
+    if bounds is not None:
+        x0 = np.clip(x0, bounds[0], bounds[1])
+        kw["bounds"] = bounds
+    return optimize.least_squares(resid, x0, method=solver, max_nfev=max_nfev, **kw).x
+
+
+def _two_step_row(row, ti, tr0, x0, opts, tr_start):
+    """Eqs. 116-117 for one trial from the start ``x0`` (step 2 from ``tr_start``)."""
+    solver, bounds, tol, max_nfev = opts
+    beta = (ti + tr0) / 2
+    n, kap = _minimise(lambda p: thilak_dop(p[0], p[1], beta) - row, x0, *opts)
+    step2 = (np.array([0.0]), np.array([np.pi / 2])) if bounds is not None else None
+    (t_r,) = _minimise(
+        lambda t: thilak_dop(n, kap, (ti + t[0]) / 2) - row, np.array([tr_start]), solver, step2,
+        tol, max_nfev,
+    )  # fmt: skip
+    return n, kap, t_r
+
+
 def thilak_two_step(
-    dop, theta_i, theta_r_nominal, rng, *, start=(1.0, 1.0), max_restarts: int = 50
+    dop,
+    theta_i,
+    theta_r_nominal,
+    rng,
+    *,
+    start=(1.0, 1.0),
+    max_restarts: int = 50,
+    solver: str = "lm",
+    bounds=None,
+    tol: float | None = None,
+    max_nfev: int | None = None,
+    theta_r_start=None,
 ) -> ThilakFit:
     """Thilak et al.'s two-step method for each row of ``dop`` (K, M) measured at ``theta_i`` (M,).
 
@@ -79,6 +144,27 @@ def thilak_two_step(
     theta_r_nominal : float [rad] -- the known reflection angle of step 1 and the start of step 2.
     rng : numpy.random.Generator -- restarts.
     start : (n, kappa) of the first attempt.
+    max_restarts : int
+        Random restarts (n in [0, 5], kappa in [0, 10]) after an unphysical solution.
+    solver : {"lm", "trf", "nelder-mead"}
+        Levenberg-Marquardt (MINPACK), trust-region reflective (the analogue of MATLAB's
+        ``lsqnonlin`` interior-reflective Newton method, the only one taking ``bounds``), or
+        Nelder-Mead on the sum of squares (MATLAB's ``fminsearch``).
+    bounds : ((n_lo, n_hi), (kappa_lo, kappa_hi)) or None
+        Box of step 1 (step 2 is then bounded to theta_r in [0, 90] deg); a bounded solution is
+        physical by construction, so it never restarts.
+    tol : float or None
+        Stopping tolerance on the relative change of the cost and of the parameters and on
+        the gradient (``ftol``, ``xtol``, ``gtol``; for Nelder-Mead the absolute ``xatol`` and
+        ``fatol``, default 1e-4); None keeps scipy's defaults (1e-8). MATLAB's defaults are
+        1e-6 (``lsqnonlin``) and 1e-4 (``fminsearch``). In the flat (n, kappa) valley of few
+        measurements the stopping point depends on it.
+    max_nfev : int or None
+        Function evaluations per fit (None: scipy's default; MATLAB's ``lsqnonlin`` stops at
+        ``100 * 2``, ``fminsearch`` at ``200 * 2`` for two unknowns).
+    theta_r_start : float [rad], "random" or None
+        Start of step 2: None for ``theta_r_nominal``; "random" draws it uniformly in
+        (0, 90) deg with ``rng`` for every attempt.
 
     Returns
     -------
@@ -95,30 +181,86 @@ def thilak_two_step(
         raise ValueError(
             "theta_i must hold at least 3 measurements (Eq. 116 has two unknowns plus theta_r)"
         )
-    beta = (ti + tr0) / 2
-    K = y.shape[0]
-    out = np.full((K, 3), np.nan)
-    restarts = np.zeros(K, int)
+    opts = (solver, _check_options(solver, bounds, tol, max_nfev), tol, max_nfev)
+    if isinstance(theta_r_start, str) and theta_r_start != "random":
+        raise ValueError(f"theta_r_start must be an angle, 'random' or None, got {theta_r_start!r}")
+    if theta_r_start is not None and theta_r_start != "random":
+        theta_r_start = float(as_angle(theta_r_start, "theta_r_start"))
+    out = np.full((y.shape[0], 3), np.nan)
+    restarts = np.zeros(y.shape[0], int)
     for k, row in enumerate(y):
         x0 = np.array(start, float)
-        for attempt in range(max_restarts + 1):
-            r1 = optimize.least_squares(
-                lambda p, row=row: thilak_dop(p[0], p[1], beta) - row, x0, method="lm"
-            )
-            n, kap = r1.x
-            ok = n >= 0 and kap >= 0
-            if ok:
-                r2 = optimize.least_squares(
-                    lambda t, row=row, n=n, kap=kap: thilak_dop(n, kap, (ti + t[0]) / 2) - row,
-                    [tr0],
-                    method="lm",
-                )
-                t_r = float(r2.x[0])
-                ok = 0 < t_r < np.pi / 2
-            if ok:
+        for _ in range(max_restarts + 1):
+            t2 = tr0 if theta_r_start is None else theta_r_start
+            t2 = rng.uniform(0, np.pi / 2) if t2 == "random" else t2
+            n, kap, t_r = _two_step_row(row, ti, tr0, x0, opts, t2)
+            if n >= 0 and kap >= 0 and 0 < t_r < np.pi / 2:
                 out[k] = n, kap, t_r
                 break
             restarts[k] += 1
             x0 = np.array([rng.uniform(0, 5), rng.uniform(0, 10)])
     ok = np.isfinite(out[:, 0])
     return ThilakFit(n=out[:, 0], kappa=out[:, 1], theta_r=out[:, 2], restarts=restarts, ok=ok)
+
+
+def thilak_jacobian(n, kappa, beta) -> np.ndarray:
+    """Derivatives of Eq. 115 in (n, kappa, beta) for n, kappa > 0 and beta in (0, 90) deg.
+
+    The derivatives in n and kappa are analytic (those of
+    :func:`scatterlab.fresnel.smooth_dolp`); the one in beta is a fourth-order central difference
+    with step 1e-3 rad (truncation error ~1e-13 relative).
+
+    Parameters
+    ----------
+    n, kappa : array_like
+    beta : array_like [rad]
+
+    Returns
+    -------
+    ndarray (..., 3), broadcast shape of the inputs plus (dP/dn, dP/dkappa, dP/dbeta [1/rad]).
+    """
+    n, kappa, beta = np.broadcast_arrays(*(np.asarray(a, float) for a in (n, kappa, beta)))
+    _, grad = smooth_dolp(n - 1j * kappa, np.cos(beta), np.sin(beta) ** 2, gradient=True)
+    h = 1e-3
+    f = [thilak_dop(n, kappa, beta + s * h) for s in (-2, -1, 1, 2)]
+    dbeta = (f[0] - 8 * f[1] + 8 * f[2] - f[3]) / (12 * h)
+    return np.concatenate([grad, dbeta[..., None]], -1)
+
+
+def thilak_crlb(n, kappa, theta_r, theta_i, noise, *, theta_r_known: bool = False) -> np.ndarray:
+    """Cramer-Rao bounds of (n, kappa, theta_r) from DOP measurements (Eq. 115) at ``theta_i``.
+
+    Fisher information :math:`J^TJ/s^2` with :math:`J` the Jacobian of
+    :math:`P(n, \\kappa, (\\theta_i + \\theta_r)/2)`; with ``theta_r_known`` the information of
+    (n, kappa) alone, the situation of Thilak's step 1 (Eq. 116), where the angle is given.
+    Directions the design does not determine get an infinite bound
+    (:func:`scatterlab.inversion.design.inverse_information`).
+
+    Parameters
+    ----------
+    n, kappa : float
+        The truth, n > 0, kappa > 0.
+    theta_r : float [rad]
+    theta_i : array (M,) [rad]
+    noise : float
+        DOP noise standard deviation (> 0).
+    theta_r_known : bool
+
+    Returns
+    -------
+    ndarray (3,) or (2,)
+        Standard deviations of (n, kappa[, theta_r]) (theta_r in rad).
+    """
+    if not (np.isfinite(noise) and noise > 0):
+        raise ValueError(f"noise must be a positive DOP standard deviation, got {noise}")
+    if not (n > 0 and kappa > 0):
+        raise ValueError(f"n and kappa must be > 0 (eta = n - 1j*kappa), got {n}, {kappa}")
+    ti = as_angle(theta_i, "theta_i").ravel()
+    tr = float(as_angle(theta_r, "theta_r"))
+    J = thilak_jacobian(n, kappa, (ti + tr) / 2) * np.array([1.0, 1.0, 0.5])  # dbeta/dtheta_r
+    if theta_r_known:
+        J = J[:, :2]
+    if ti.size < J.shape[1]:
+        raise ValueError(f"theta_i must hold at least {J.shape[1]} angles, got {ti.size}")
+    cov, _ = inverse_information(J.T @ J / noise**2)
+    return np.sqrt(np.clip(np.diagonal(cov), 0, None))
