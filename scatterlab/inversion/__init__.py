@@ -4,7 +4,7 @@ Eqs. 199-204).
 * :func:`fit_dolp` -- batched bounded least squares over leading axes (whole images at once);
   :func:`fit_dolp_per_pixel` is the per-pixel scipy baseline;
 * :func:`thilak_two_step` -- Thilak et al.'s two-step method (Eqs. 116-117), the comparison
-baseline;
+  baseline, and :func:`thilak_crlb`, the Cramer-Rao bound of its (n, kappa, theta_r) from Eq. 115;
 * :func:`sample_posterior` / :func:`sample_posteriors` -- emcee posterior sampling with diagnostics,
   multimodality detection and HDF5 checkpoints;
 * :func:`fisher_information`, :func:`crlb` -- experiment design;
@@ -37,7 +37,7 @@ from scatterlab.inversion.posterior import (
     sample_posteriors,
     split_rhat,
 )
-from scatterlab.inversion.thilak import ThilakFit, thilak_two_step
+from scatterlab.inversion.thilak import ThilakFit, thilak_crlb, thilak_two_step
 
 __all__ = [
     "fit_dolp",
@@ -61,6 +61,7 @@ __all__ = [
     "ensemble_rhat",
     "effective_sample_size",
     "thilak_two_step",
+    "thilak_crlb",
     "ThilakFit",
     "fisher_information",
     "crlb",
