@@ -41,3 +41,14 @@ def test_saved_coefficients_resume_only_under_the_same_settings(tmp_path):
     MOM.save_runs(tmp_path / "old.npz", runs)
     assert MOM.resume_runs(tmp_path / "old.npz", settings) is None
     assert set(MOM.load_runs(tmp_path / "old.npz")[0.3, 0.5]) == {"glass", "pec"}
+
+
+def test_coverage_verdict_calls_over_and_under_coverage_beyond_two_binomial_errors():
+    # 24 units at 68 %: two standard errors are 2 sqrt(0.68 * 0.32 / 24) = 0.19
+    assert MOM.coverage_verdict(0.92, 0.68, 24) == "over-covers"
+    assert MOM.coverage_verdict(0.50, 0.68, 24) == "nominal"
+    assert MOM.coverage_verdict(0.45, 0.68, 24) == "under-covers"
+    # 32 units at 95 %: 2 sqrt(0.95 * 0.05 / 32) = 0.077
+    assert MOM.coverage_verdict(0.88, 0.95, 32) == "nominal"
+    assert MOM.coverage_verdict(0.85, 0.95, 32) == "under-covers"
+    assert MOM.coverage_verdict(1.0, 0.95, 32) == "nominal"
