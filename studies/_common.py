@@ -60,6 +60,20 @@ def calibrate(instrument, rng, noise, repeats=1, **kw):
     return ecm_calibrate(B0, refs, **kw)
 
 
+def _chain_accuracy_text(d_eta, eta, published_fit):
+    """The synthetic chain's error |d eta| against the reference's real-data shift
+    |published fit - literature eta| (``published_fit`` as "n - jkappa"), both in the text."""
+    n, kappa = (float(v) for v in published_fit.replace(" ", "").split("-j"))
+    shift = abs(complex(n, -kappa) - eta)
+    size = "smaller than" if d_eta < shift else "not smaller than"
+    size = "far smaller than" if d_eta < 0.1 * shift else size
+    return (
+        "they show the accuracy of the measurement chain and the fit (|d eta| = "
+        f"{d_eta:.1e} here), {size} the reference's shift from the literature value "
+        f"(|{published_fit} - literature| = {shift:.2g})."
+    )
+
+
 def mueller_figure_study(ctx, eta, sigma, label, published_fit, literature_name):
     """Figs. 41-42: synthetic Mueller measurements of a rough metal vs the pBRDF; best-fit index."""
     from scatterlab.ellipsometry import fit_mueller_elements, normalised_elements
@@ -171,9 +185,8 @@ def mueller_figure_study(ctx, eta, sigma, label, published_fit, literature_name)
         "a real sample differs from the model (surface oxide or contamination, multiple "
         "scattering and depolarisation beyond the single-bounce facet model, a non-Gaussian slope "
         "distribution, the bulk index of a sprayed or plated coating). Synthetic data generated "
-        "by the model itself cannot reproduce that shift; they show the accuracy of the "
-        "measurement chain and the fit (a few 1e-3 in eta here), far smaller than the "
-        "differences the reference reports."
+        "by the model itself cannot reproduce that shift; "
+        + _chain_accuracy_text(abs(fit.eta - eta), eta, published_fit)
     )
     set_verdict(
         ctx,

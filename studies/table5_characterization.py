@@ -147,6 +147,15 @@ def run(ctx):
     _findings(ctx, summary, cfg)
 
 
+def _shrink_text(kept, total):
+    """Whether the paint's scatter shrink is reproduced: in all, none or ``kept`` of ``total``."""
+    if kept == total:
+        return f"Reproduced in all {total} cases. "
+    if kept == 0:
+        return "NOT reproduced in any case. "
+    return f"Reproduced in {kept} of {total} cases, NOT in the other {total - kept}. "
+
+
 def _findings(ctx, summary, cfg):
     """The text's central numbers against ours: paint scatter shrink factor, metal kappa."""
     m = ctx.metrics
@@ -182,7 +191,7 @@ def _findings(ctx, summary, cfg):
         f"published {min(pub_ratio):.1f}-{max(pub_ratio):.1f}x, ours "
         + ", ".join(f"{r:.2f}x" for r in ratio)
         + f" ({kept} of {len(ratio)} cases reach the text's lower end, 2x). "
-        + ("Reproduced. " if kept == len(ratio) else "NOT reproduced in the other cases. ")
+        + _shrink_text(kept, len(ratio))
         + "Corrected metal kappa against Table 5: "
         + "; ".join(
             f"{c['name'].split(' corrected')[0]} ours {c['ours']:.2f}, published "
