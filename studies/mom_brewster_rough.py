@@ -8,6 +8,9 @@ formulation, :func:`scatterlab.mom.solve`, 15 points per wavelength outside = 10
 the total reflected power of Thorsos tapered waves on Gaussian surfaces (rms height 0.3 wavelength)
 of rms slope 0.1 and 0.3, averaged over realizations; the energy check R + T = 1 is reported
 alongside.
+
+Full-mode run time (measured 24 Nov 2026, serial, load average 2.0-4.0 on the shared 2-core
+machine): 93 s wall.
 """
 
 import numpy as np

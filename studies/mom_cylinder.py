@@ -1,4 +1,8 @@
-"""MoM validation: bistatic echo width of a PEC circular cylinder (TM) against the exact series solution."""
+"""MoM validation: bistatic echo width of a PEC circular cylinder (TM) against the exact series solution.
+
+Full-mode run time (measured 24 Nov 2026, serial, load average 1.7-2.0 on the shared 2-core
+machine): 9 s wall.
+"""
 
 import time
 import warnings

@@ -1,5 +1,9 @@
 """Phase-screen structure function with and without subharmonics, against 6.88 (r/r0)^(5/3) (own study;
-the errata to Eq. 79 note the low-frequency deficit of plain FFT screens)."""
+the errata to Eq. 79 note the low-frequency deficit of plain FFT screens).
+
+Full-mode run time (measured 24 Nov 2026, serial, load average 1.8-1.3 on the shared 2-core
+machine): 261 s wall.
+"""
 
 import numpy as np
 

@@ -3,6 +3,9 @@
 The specular term obeys Mueller reciprocity; the diffuse term (1 - rho(theta_i))/pi M00 of Eq. 177 depends on
 theta_i only (errata to Sec. 4.2.3). We map the relative asymmetry |F00(i, r) - F00(r, i)| / F00 for both
 diffuse choices, and check that both conserve the energy of a PEC.
+
+Full-mode run time (measured 24 Nov 2026, serial, load average 1.7-1.8 on the shared 2-core
+machine): 9 s wall.
 """
 
 import numpy as np

@@ -1,5 +1,9 @@
 """Ellipsometry accuracy against run time: number of repeats, ECM azimuth-fit tolerance, and the
-throughput of applying a calibration to Mueller-matrix images (vs a per-pixel loop)."""
+throughput of applying a calibration to Mueller-matrix images (vs a per-pixel loop).
+
+Full-mode run time (measured 24 Nov 2026, serial, load average 3.7-3.4 on the shared 2-core
+machine): 20 s wall.
+"""
 
 import time
 

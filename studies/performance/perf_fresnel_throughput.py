@@ -6,6 +6,9 @@ same run with a straightforward per-element Python loop (cmath for Fresnel, the
 explicit Eq. 133 sums for the Mueller matrix) timed on a subset and scaled. The
 loop results are also compared with the vectorised ones (max abs difference),
 so the speed-up is at equal results.
+
+Full-mode run time (measured 24 Nov 2026, serial, load average 4.0-3.9 on the shared 2-core
+machine): 8 s wall.
 """
 
 import cmath

@@ -1,5 +1,9 @@
 """Phase screens: subharmonic levels and screen size vs structure-function error vs time, and speed against
-AOtools' ft_sh_phase_screen at 256 and 512 pixels (same run)."""
+AOtools' ft_sh_phase_screen at 256 and 512 pixels (same run).
+
+Full-mode run time (measured 24 Nov 2026, serial, load average 3.3-2.6 on the shared 2-core
+machine): 60 s wall.
+"""
 
 import numpy as np
 
