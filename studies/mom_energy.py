@@ -1,4 +1,8 @@
-"""MoM energy balance: the integrated scattering coefficient of rough PEC surfaces against incidence and slope."""
+"""MoM energy balance: the integrated scattering coefficient of rough PEC surfaces against incidence and slope.
+
+Full-mode run time (measured 24 Nov 2026, serial, load average 2.0-2.5 on the shared 2-core
+machine): 128 s wall.
+"""
 
 import numpy as np
 
