@@ -1,5 +1,7 @@
 """Text generators of the rep2 studies (issue 19): hand-made numbers in, verdict and text out."""
 
+import pytest
+
 from scatterlab import study_runner
 
 STUDIES = study_runner.discover()
@@ -34,3 +36,22 @@ def test_fig51_adaptive_better_than_both_is_reproduced():
     verdict, headline, _ = mod.adaptive_verdict(m)
     assert verdict == "reproduced"
     assert "all-paint map on 2/2" in headline
+
+
+@pytest.mark.parametrize(
+    ("edge", "band", "label"),
+    [
+        (0.80, 0.54, "borderline"),  # the review's quick-mode numbers: 1.48x
+        (0.80, 0.30, "concentrated"),
+        (0.50, 0.50, "not concentrated"),
+        (float("nan"), 0.5, "no errors"),
+    ],
+)
+def test_fig55_boundary_label(edge, band, label):
+    assert _load("fig55").boundary_concentration(edge, band)[0] == label
+
+
+def test_fig24_caption_criterion_is_above_40_deg():
+    # the review's example: a first peak at 60 deg is "> 40 deg", one at 40 deg is not
+    firsts = {"Al_5": 60.0, "Al_10": 40.0, "MgO_10": 40.0, "MgO_20": None, "Al_20": 45.0}
+    assert _load("fig24").caption_consistent(firsts) == ["Al_5", "Al_20"]
