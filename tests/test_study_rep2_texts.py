@@ -55,3 +55,22 @@ def test_fig24_caption_criterion_is_above_40_deg():
     # the review's example: a first peak at 60 deg is "> 40 deg", one at 40 deg is not
     firsts = {"Al_5": 60.0, "Al_10": 40.0, "MgO_10": 40.0, "MgO_20": None, "Al_20": 45.0}
     assert _load("fig24").caption_consistent(firsts) == ["Al_5", "Al_20"]
+
+
+def _design_bounds(spec01, off01, spec_rough, off_rough):
+    rough = {"0.3": {"specular": spec_rough, "off": off_rough}}
+    return {"sigma_bound_at_0.1": {"specular": spec01, "off": off01}, "sigma_bound_rough": rough}
+
+
+def test_design_text_follows_the_bounds():
+    mod = _load("design")
+    # sweep better at 0.1 for both, but 10x apart at 0.3: not "comparable", remark holds
+    m = {"iron": _design_bounds(10.0, 2.0, 10.0, 1.0), "paint": _design_bounds(1.0, 0.3, 1, 0.9)}
+    text, holds = mod.design_text(m)
+    assert holds
+    assert "NOT comparable" in text and "1 of 2" in text
+    # specular better at 0.1 for paint: the remark does not hold
+    m["paint"] = _design_bounds(0.2, 0.3, 1.0, 0.9)
+    text, holds = mod.design_text(m)
+    assert not holds
+    assert "does NOT hold" in text
