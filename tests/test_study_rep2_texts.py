@@ -74,3 +74,28 @@ def test_design_text_follows_the_bounds():
     text, holds = mod.design_text(m)
     assert not holds
     assert "does NOT hold" in text
+
+
+def _coverage_case(cover_at_09, converged):
+    levels = [0.5, 0.9]
+    return {
+        "levels": levels,
+        "coverage": [[0.5, 0.5, 0.5], [0.9, cover_at_09, 0.9]],
+        "max_abs_z": abs(cover_at_09 - 0.9) / (0.09 / 100) ** 0.5,
+        "converged_fraction": converged,
+    }
+
+
+@pytest.mark.parametrize(
+    ("cover", "converged", "words"),
+    [
+        (0.5, 1.0, ["UNDER-covers", "kappa at nominal 0.9: 0.50"]),  # the review's 0.9 -> 0.5
+        (1.0, 1.0, ["OVER-covers"]),  # 10 s.e. above with 100 trials
+        (0.88, 1.0, ["consistent with calibrated"]),
+        (0.88, 0.0, ["NOT judged", "only 0% of the runs converged"]),  # the review's iron case
+    ],
+)
+def test_coverage_case_text(cover, converged, words):
+    text, short = _load("coverage").case_text("paint", _coverage_case(cover, converged), 100)
+    assert all(w in text for w in words)
+    assert ("not judged" in short) == (converged < 0.5)
