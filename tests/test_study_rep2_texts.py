@@ -99,3 +99,27 @@ def test_coverage_case_text(cover, converged, words):
     text, short = _load("coverage").case_text("paint", _coverage_case(cover, converged), 100)
     assert all(w in text for w in words)
     assert ("not judged" in short) == (converged < 0.5)
+
+
+def _taper(peak_std, peak_dbl, range_std, range_dbl):
+    return {
+        "rms_log10_change_in_lobe": 0.076,
+        "rms_log10_noise_in_lobe": 0.090,
+        "peak_deg_standard": peak_std,
+        "peak_deg_doubled": peak_dbl,
+        "peak_range_deg_standard": range_std,
+        "peak_range_deg_doubled": range_dbl,
+    }
+
+
+def test_fig39_peak_shift_is_tested_against_its_own_uncertainty():
+    mod = _load("fig39")
+    ms = {"theta_i_75": {"peak_deg_pbrdf": 74.5, "peak_deg_mom": 47.5}}
+    # the review's full-mode case: lobe stable, peak 47.5 -> 54.0 with narrow, disjoint peaks
+    text, ok = mod.setup_text({"theta_i_75": _taper(47.5, 54.0, [46, 49], [52, 56])}, ms)
+    assert not ok
+    assert "1 of 1 cases beyond" in text and "24% of the 27.0-deg gap" in text
+    assert "not the cause" not in text
+    # the same shift inside broad peak ranges: not distinguishable, set-up cleared
+    text, ok = mod.setup_text({"theta_i_75": _taper(47.5, 54.0, [44, 56], [45, 58])}, ms)
+    assert ok and "not the cause" in text
