@@ -21,8 +21,11 @@ the set-up at 60 and 75 deg (taper and partition doubled, against the Monte-Carl
 Full mode: 100 partitions of 1500 unknowns in each polarization plus 50 of 3000 for the check:
 267 s wall with ``--workers 2`` at a load average of about 3 (24 Nov 2026; the check 160 s). Its
 result: for theta_i >= 45 deg the 2-D slice peaks 10-27 deg after the MoM, the 1-D facet model
--0.5 to +2.5 deg from it with RMS log10 ratios 0.05-0.12 in absolute units; doubling the taper
-and partition changes the lobe by 0.076 RMS log10 against a noise of 0.090. Quick mode 900
+-0.5 to +2.5 deg from the s-pol MoM (over all rows, s and p, -14.5 to +7.0 deg: s 30 deg peaks
+23.0 against 37.5), RMS log10 ratios 0.05-0.14 in absolute units; doubling the taper and
+partition changes the lobe by 0.076 RMS log10 against a noise of 0.090, but moves the 75-deg
+peak 47.5 -> 54.0 deg (a quarter of the 27-deg gap; that run predates the peak's own 2-s.e.
+range, now in the report). Quick mode 900
 wavelengths: 56 s wall (18 s of CPU) measured at load ~8 on the shared 2-core machine.
 """
 
