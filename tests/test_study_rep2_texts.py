@@ -123,3 +123,15 @@ def test_fig39_peak_shift_is_tested_against_its_own_uncertainty():
     # the same shift inside broad peak ranges: not distinguishable, set-up cleared
     text, ok = mod.setup_text({"theta_i_75": _taper(47.5, 54.0, [44, 56], [45, 58])}, ms)
     assert ok and "not the cause" in text
+
+
+def test_fig31_verdict_follows_the_errors():
+    mod = _load("fig31_fig33")
+    # the review's numbers: errors 1.3 and 3.0 deg at s.e. 0.2 and 0.5; raw LS 0.5 and 0.1 deg
+    verdict, text = mod.aop_verdict([1.3, 3.0], [0.2, 0.5], [10, 11], [0.5, 0.1])
+    assert verdict == "partly"
+    assert "does NOT cover the error of 2 of 2" in text
+    assert "top and bottom bars WORSE" in text
+    verdict, text = mod.aop_verdict([0.3, 0.4], [0.2, 0.5], [10, 11], [0.5, 0.6])
+    assert verdict == "reproduced" and "improves on it for every bar" in text
+    assert mod.aop_verdict([12.0, 0.4], [0.2, 0.5], [10, 11], [0.5, 0.6])[0] == "not reproduced"
