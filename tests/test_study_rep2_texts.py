@@ -123,6 +123,10 @@ def test_fig39_peak_shift_is_tested_against_its_own_uncertainty():
     # the same shift inside broad peak ranges: not distinguishable, set-up cleared
     text, ok = mod.setup_text({"theta_i_75": _taper(47.5, 54.0, [44, 56], [45, 58])}, ms)
     assert ok and "not the cause" in text
+    assert "not significant" not in text  # the pBRDF peak (74.5) lies outside 44-56
+    # the full run's flat lobe: the pBRDF peak inside the MoM peak's range, offset not significant
+    text, ok = mod.setup_text({"theta_i_75": _taper(47.5, 54.0, [28.5, 77], [21.5, 80])}, ms)
+    assert ok and "the peak offset is not significant" in text
 
 
 def test_fig31_verdict_follows_the_errors():
