@@ -365,7 +365,7 @@ def setup_text(check, ms):
     ]
     if inside:
         text += (
-            " The MoM lobe is so flat at "
+            " The MoM peak is so poorly located (flat lobe or Monte-Carlo noise) at "
             + " and ".join(k[8:] for k in inside)
             + " deg that the pBRDF's peak angle lies inside the MoM peak's 2-s.e. range: there "
             "the peak offset is not significant, and the back-scatter excess is the robust "
