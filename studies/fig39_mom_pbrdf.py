@@ -24,8 +24,10 @@ result: for theta_i >= 45 deg the 2-D slice peaks 10-27 deg after the MoM, the 1
 -0.5 to +2.5 deg from the s-pol MoM (over all rows, s and p, -14.5 to +7.0 deg: s 30 deg peaks
 23.0 against 37.5), RMS log10 ratios 0.05-0.14 in absolute units; doubling the taper and
 partition changes the lobe by 0.076 RMS log10 against a noise of 0.090, but moves the 75-deg
-peak 47.5 -> 54.0 deg (a quarter of the 27-deg gap; that run predates the peak's own 2-s.e.
-range, now in the report). Quick mode 900
+peak 47.5 -> 54.0 deg (a quarter of the 27-deg gap), inside the peak's own 2-s.e. range
+(angles within 2 s.e. of the peak: 28.5-77.0 deg at 75, 20.5-62.5 deg at 60), which also holds
+the pBRDF's peak angle: at grazing incidence the peak offset is not significant, the back-scatter
+excess (2.2-3.0 decades) is. Full run 279 s serial at load ~2 (24 Nov). Quick mode 900
 wavelengths: 56 s wall (18 s of CPU) measured at load ~8 on the shared 2-core machine.
 """
 
