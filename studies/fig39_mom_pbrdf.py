@@ -272,7 +272,7 @@ def _findings(by_pol, check, partitions):
     lobe_go = [by_pol[p][k]["rms_log10_ratio_absolute_go1d"] for p, k in rows]
     worst = max(off_all, key=lambda r: abs(off_all[r]))
     wm = by_pol[worst[0]][worst[1]]
-    setup, _ = setup_text(check, ms)
+    setup, _, inside = setup_text(check, ms)
     diff = max(
         abs(by_pol["s"][k]["peak_height_mom"] / by_pol["p"][k]["peak_height_mom"] - 1) for k in ms
     )
@@ -283,6 +283,12 @@ def _findings(by_pol, check, partitions):
         f"the MoM (like for unlike); 1-D facet model {min(off_go):+.1f} to {max(off_go):+.1f} deg "
         f"(s-pol; all rows {min(off_all.values()):+.1f} to {max(off_all.values()):+.1f}), "
         f"RMS log10 {min(lobe_go):.2f}-{max(lobe_go):.2f} absolute"
+        + (
+            f"; pBRDF peak inside the MoM peak's 2-s.e. range at {', '.join(k[8:] for k in inside)}"
+            " deg (offset not significant there)"
+            if inside
+            else ""
+        )
     )
     text = (
         f"The 2-D pBRDF's in-plane slice {verdict} the 1-D MoM at grazing incidence: for theta_i "
@@ -325,6 +331,8 @@ def setup_text(check, ms):
     setup_ok : bool
         True when neither the lobe nor the peak moves beyond its Monte-Carlo noise and that noise
         is small enough (RMS log10 < 0.1) to tell.
+    inside : list of str
+        Incidence keys where the pBRDF's peak angle lies inside the MoM peak's 2-s.e. range.
     """
     taper = max(v["rms_log10_change_in_lobe"] for v in check.values())
     noise = max(v["rms_log10_noise_in_lobe"] for v in check.values())
@@ -380,4 +388,4 @@ def setup_text(check, ms):
         text += " The noise is too large here to exclude an effect of the set-up."
     else:
         text += " The grazing results depend on the set-up at this length."
-    return text, ok
+    return text, ok, inside

@@ -116,17 +116,20 @@ def test_fig39_peak_shift_is_tested_against_its_own_uncertainty():
     mod = _load("fig39")
     ms = {"theta_i_75": {"peak_deg_pbrdf": 74.5, "peak_deg_mom": 47.5}}
     # the review's full-mode case: lobe stable, peak 47.5 -> 54.0 with narrow, disjoint peaks
-    text, ok = mod.setup_text({"theta_i_75": _taper(47.5, 54.0, [46, 49], [52, 56])}, ms)
+    text, ok, inside = mod.setup_text({"theta_i_75": _taper(47.5, 54.0, [46, 49], [52, 56])}, ms)
     assert not ok
     assert "1 of 1 cases beyond" in text and "24% of the 27.0-deg gap" in text
     assert "not the cause" not in text
     # the same shift inside broad peak ranges: not distinguishable, set-up cleared
-    text, ok = mod.setup_text({"theta_i_75": _taper(47.5, 54.0, [44, 56], [45, 58])}, ms)
+    text, ok, inside = mod.setup_text({"theta_i_75": _taper(47.5, 54.0, [44, 56], [45, 58])}, ms)
     assert ok and "not the cause" in text
     assert "not significant" not in text  # the pBRDF peak (74.5) lies outside 44-56
     # the full run's flat lobe: the pBRDF peak inside the MoM peak's range, offset not significant
-    text, ok = mod.setup_text({"theta_i_75": _taper(47.5, 54.0, [28.5, 77], [21.5, 80])}, ms)
+    text, ok, inside = mod.setup_text(
+        {"theta_i_75": _taper(47.5, 54.0, [28.5, 77], [21.5, 80])}, ms
+    )
     assert ok and "the peak offset is not significant" in text
+    assert inside == ["theta_i_75"]
 
 
 def test_fig31_verdict_follows_the_errors():
