@@ -171,14 +171,19 @@ def _table(ctx, rows, keys):
         "Largest single source, per quantity and image (the fall of the error when that stage alone is "
         "ideal):\n\n"
         + "\n".join(
-            f"- {s['quantity']}, {s['image']}: **{s['largest_source']}** "
-            f"({s['realistic']:.3f} -> {s['realistic'] - s['fall']:.3f}; model only "
-            f"{s['model_only']:.3f})"
+            (
+                f"- {s['quantity']}, {s['image']}: **{s['largest_source']}** "
+                f"({s['realistic']:.3f} -> {s['realistic'] - s['fall']:.3f}; model only "
+                f"{s['model_only']:.3f})"
+                if s["largest_source"] != "none"
+                else f"- {s['quantity']}, {s['image']}: **none** (no stage made ideal lowers it "
+                f"from {s['realistic']:.3f}; model only {s['model_only']:.3f})"
+            )
             for s in summary
         )
         + "\n\n"
         + (
-            f"For the corrected images (the restored no-turbulence image meets its targets), the largest "
+            f"For the corrected images (the turbulence-degraded images after restoration), the largest "
             f"remaining error source is **{head['largest_source']}**: made ideal, it "
             f"lowers the {head['quantity']} of the {head['image']} image from {head['realistic']:.3f} to "
             f"{head['realistic'] - head['fall']:.3f} ({100 * head['relative_fall']:.0f} %). "
@@ -204,8 +209,8 @@ HEADLINE_QUANTITIES = ("dolp_rmse_truth", "classification_vs_labels", "paint_ind
 
 def attribution(rows, keys):
     """Per quantity and image, the stage whose ideal version lowers the error most; and the headline: the
-    largest relative fall over the corrected images (the restored no-turbulence image already meets its
-    targets) and the well-conditioned quantities (:data:`HEADLINE_QUANTITIES`).
+    largest relative fall over the corrected images and the well-conditioned quantities
+    (:data:`HEADLINE_QUANTITIES`).
 
     Parameters
     ----------
@@ -217,8 +222,8 @@ def attribution(rows, keys):
     Returns
     -------
     summary : list of dict
-        ``quantity``, ``image``, ``largest_source``, ``fall``, ``relative_fall``, ``realistic``,
-        ``model_only``.
+        ``quantity``, ``image``, ``largest_source`` ("none" when no stage lowers the error: the
+        largest fall is <= 0), ``fall``, ``relative_fall``, ``realistic``, ``model_only``.
     headline : dict or None
         The summary entry with the largest relative fall among the corrected images (None if no fall is
         positive).
@@ -244,7 +249,8 @@ def attribution(rows, keys):
                 {
                     "quantity": q,
                     "image": key,
-                    "largest_source": top,
+                    # no stage lowers this error when made ideal: no source to name
+                    "largest_source": top if falls[top] > 0 else "none",
                     "fall": falls[top],
                     "relative_fall": falls[top] / base[key][q] if base[key][q] > 0 else 0.0,
                     "realistic": base[key][q],

@@ -18,7 +18,7 @@ show what ignoring the correlation costs.
 import warnings
 
 import numpy as np
-from scatterlab.studies._common import plt
+from scatterlab.studies._common import plt, set_verdict
 
 from scatterlab.inversion import ConvergenceWarning, model_dolp, sample_posteriors
 
@@ -126,22 +126,76 @@ def run(ctx):
     axes[-1].legend(fontsize=7)
     ctx.save_figure(fig, "coverage")
     m = ctx.metrics
+    texts = {name: case_text(name, m[name], trials) for name in CASES}
     ctx.say(
-        "Empirical coverage against nominal level; the largest deviation is "
-        f"{m['paint']['max_abs_z']:.1f} (paint), {m['iron']['max_abs_z']:.1f} (iron) and "
-        f"{m['paint_correlated']['max_abs_z']:.1f} (paint, correlated errors + systematic, "
-        "sampled with "
-        "covariance and systematic) binomial standard errors over 10 levels x 3 parameters (about "
-        "2.5-3 is "
-        "expected from chance alone for 30 correlated checks). "
+        f"Empirical coverage against nominal level, {trials} trials per case (binomial s.e. "
+        f"{se[LEVELS == 0.5][0]:.2f} at level 0.5); deviations in binomial standard errors over "
+        f"10 levels x 3 parameters, up to about {CHANCE_Z:g} expected from chance alone for 30 "
+        "correlated checks. Convergence: run length, acceptance, R-hat between two independent "
+        "ensembles.\n\n"
+        + "\n".join(f"- {t}" for t, _ in texts.values())
         + (
-            "Taking the correlated errors as independent gives "
-            f"{m['paint_correlated']['naive_max_abs_z']:.1f}. "
+            "\n\nTaking the correlated errors as independent gives "
+            f"{m['paint_correlated']['naive_max_abs_z']:.1f} standard errors."
             if "naive_max_abs_z" in m["paint_correlated"]
             else ""
         )
-        + f"{m['paint']['converged_fraction']:.0%} / {m['iron']['converged_fraction']:.0%} / "
-        f"{m['paint_correlated']['converged_fraction']:.0%} of the runs met every convergence "
-        "criterion "
-        "(run length, acceptance, R-hat between two independent ensembles)."
     )
+    set_verdict(
+        ctx,
+        "own study",
+        f"{trials} trials: " + "; ".join(f"{name} {short}" for name, (_, short) in texts.items()),
+    )
+
+
+CHANCE_Z = 3.0  # largest |z| over 30 correlated checks expected from chance alone (about 2.5-3)
+CONVERGED_MIN = 0.5  # below this fraction of converged runs, a case's coverage is not judged
+
+
+def case_text(name, case, trials):
+    """One case's calibration statement, generated from its coverage numbers.
+
+    Parameters
+    ----------
+    name : str
+        Case name.
+    case : dict
+        ``levels``, ``coverage`` (levels x 3: n, kappa, sigma), ``max_abs_z`` and
+        ``converged_fraction``.
+    trials : int
+        Trials per case.
+
+    Returns
+    -------
+    text : str
+        The sentence: calibrated / under-covers / over-covers (worst nominal -> empirical level and
+        parameter), with the share of converged runs and a caveat when it is below CONVERGED_MIN.
+    short : str
+        The same verdict in a few words for the headline.
+    """
+    levels = np.asarray(case["levels"])
+    cover = np.asarray(case["coverage"])
+    se = np.sqrt(levels * (1 - levels) / trials)
+    z = (cover - levels[:, None]) / se[:, None]
+    i, k = np.unravel_index(np.argmax(np.abs(z)), z.shape)
+    worst = (
+        f"{('n', 'kappa', 'sigma')[k]} at nominal {levels[i]:g}: {cover[i, k]:.2f}, "
+        f"{z[i, k]:+.1f} s.e."
+    )
+    if case["max_abs_z"] <= CHANCE_Z:
+        short = f"calibrated (max {case['max_abs_z']:.1f} s.e.)"
+        text = f"{name}: consistent with calibrated coverage (largest deviation {worst})"
+    else:
+        kind = "UNDER-covers" if z[i, k] < 0 else "OVER-covers"
+        short = f"{kind.lower()} ({worst})"
+        text = f"{name}: {kind}, beyond chance (largest deviation {worst})"
+    conv = case["converged_fraction"]
+    if conv < CONVERGED_MIN:
+        text = (
+            f"{name}: NOT judged -- only {conv:.0%} of the runs converged, so its coverage "
+            f"(largest deviation {worst}) describes unconverged chains, not the posterior"
+        )
+        short = f"not judged ({conv:.0%} converged)"
+    else:
+        text += f"; {conv:.0%} of the runs converged"
+    return text + ".", short

@@ -46,3 +46,20 @@ def test_attribution_names_the_stage_with_the_largest_relative_fall_of_a_correct
         s for s in summary if s["quantity"] == "metal_index_error" and s["image"] == keys[1]
     )
     assert metal["largest_source"] == "no noise"  # listed, but not the headline
+
+
+def test_attribution_names_no_source_when_no_stage_lowers_the_error():
+    # the review's case: every ideal stage leaves the metal index error as is or makes it worse
+    keys = ["D_r0_7.9_corrected"]
+    rows = {
+        "realistic": {keys[0]: _row(0.3, 0.2, 0.5, 3.59)},
+        "true PSF": {keys[0]: _row(0.2, 0.1, 0.4, 3.59)},
+        "no noise": {keys[0]: _row(0.29, 0.2, 0.5, 4.2)},
+        "all ideal (model only)": {keys[0]: _row(0.0, 0.0, 0.0, 0.0)},
+    }
+    summary, head = BUDGET.attribution(rows, keys)
+    metal = next(s for s in summary if s["quantity"] == "metal_index_error")
+    assert metal["largest_source"] == "none"
+    dolp = next(s for s in summary if s["quantity"] == "dolp_rmse_truth")
+    assert dolp["largest_source"] == "true PSF"
+    assert head["largest_source"] == "true PSF"

@@ -1,5 +1,6 @@
 """Time to simulate a whole 4-channel 512 x 512 polarimetric scene (render, PSF from a fresh phase screen,
-channels, noise, Stokes estimate) on this machine; goal: under a second (issue 7, item 8)."""
+channels, noise, Stokes estimate) on this machine; goal: under a second (issue 7, item 8). Both modes
+time the 512 x 512 scene (quick: best of 3, full: best of 5)."""
 
 from scatterlab.imaging import (
     ANGLES_0_45_90_135,
@@ -20,10 +21,12 @@ STUDY = {
     "title": "Whole 4-channel 512 x 512 scene simulation time",
     "reproduces": "own performance study (issue 7, item 8)",
 }
+GOAL_SIZE, GOAL_S = 512, 1.0  # issue 7, item 8
 
 
 def run(ctx):
-    size = 256 if ctx.quick else 512
+    size = GOAL_SIZE
+    repeat = 3 if ctx.quick else 5
     n = size // 2
     scene = painted_plate(size, rng=0)
     pupil = circular_pupil(n, n / 2)
@@ -43,10 +46,12 @@ def run(ctx):
             return stokes_from_channels(counts, ANGLES_0_45_90_135)
 
     with ctx.step("timing"):
-        total = best_time(simulate, repeat=5)
+        total = best_time(simulate, repeat=repeat)
         sw = Stopwatch()
         simulate(sw)
-    ctx.metrics.update({"size": size, "total_s": total, "steps_s": sw.times})
+    ctx.metrics.update(
+        {"size": size, "total_s": total, "steps_s": sw.times, "goal_met": total < GOAL_S}
+    )
     pyplot = plt()
     fig, ax = pyplot.subplots(figsize=(5, 3))
     ax.bar(list(sw.times), list(sw.times.values()))
@@ -54,7 +59,8 @@ def run(ctx):
     ax.set_title(f"{size} x {size}, 4 channels: {total:.2f} s")
     ctx.save_figure(fig, "perf_scene")
     ctx.say(
-        f"A whole 4-channel {size} x {size} scene takes {total:.2f} s (best of 5; goal < 1 s at 512): "
+        f"A whole 4-channel {size} x {size} scene takes {total:.2f} s (best of {repeat}; goal < "
+        f"{GOAL_S:g} s at {GOAL_SIZE}: {'met' if total < GOAL_S else 'NOT met'}): "
         + ", ".join(f"{k} {v * 1e3:.0f} ms" for k, v in sw.times.items())
         + "."
     )
