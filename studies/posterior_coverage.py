@@ -13,6 +13,11 @@ DOLP errors are correlated across geometries (sd 2e-3, correlation 0.7^|i-j|) pl
 error of 1e-3 on the four off-specular geometries, sampled with ``covariance`` and ``systematic``.
 In full mode the same data are also sampled with the naive independent noise of the same size, to
 show what ignoring the correlation costs.
+
+Full-mode run time (24 Nov 2026): not finished in 900 s serial on the shared 2-core machine (load
+average 1-2.3; stopped). Quick mode takes 45 s for 8 trials per case; full mode runs 200 per case,
+with chains run until converged, plus the naive re-run of the correlated case: about 25-30 minutes
+serial by that scaling (use ``--workers 2``).
 """
 
 import warnings
