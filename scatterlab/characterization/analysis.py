@@ -84,7 +84,8 @@ class AnalyzeSettings:
         spread added to the region error. One re-simulation is one draw of the blind EM's random
         start: on the example dataset the paint's bias at 40 deg ranged from +0.05 to +0.18 between
         draws, as much as the rest of its error, and with two geometries no noise term is inferred to
-        absorb it. Ignored with the known diffraction PSF (deterministic).
+        absorb it. Ignored with the known diffraction PSF, whose self-calibration makes its own noisy
+        re-simulations and measures its noise and edge terms from them.
     posterior_steps : int
         Chain length of the region posteriors.
     model_error : bool
@@ -297,7 +298,7 @@ def _layout(images, thetas, settings) -> np.ndarray:
 def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
     """Region data from the layout, their self-calibration and posteriors, and the per-pixel maps:
     (estimates, maps, regions left out)."""
-    from scatterlab.characterization.self_calibration import restoration_bias
+    from scatterlab.characterization.self_calibration import bias_corrected, restoration_bias
     from scatterlab.deconvolution import resample_psf
 
     thetas = np.asarray(ds.theta, float)
@@ -319,14 +320,18 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
     blind = settings.psf == "blind"
     psfs = [resample_psf(r.psf, shape) if blind else a.psf_true for r, a in zip(rests, acqs)]
     cfg = _config(ds, settings)
-    samples = settings.bias_samples if blind else 1  # a known-PSF re-simulation is deterministic
+    # a known-PSF re-simulation measures its own noise and edge terms (one call); a blind one is repeated
+    samples = settings.bias_samples if blind else 1
     draws = [
         restoration_bias(
             regions, layout, thetas, psfs, cfg, rng, sel, margin, blind=blind, executor=executor
         )
         for _ in range(samples)
     ]
-    regions = [_bias_corrected(r, np.stack([d[r.name].mean for d in draws])) for r in regions]
+    if blind:
+        regions = [_bias_corrected(r, np.stack([d[r.name].mean for d in draws])) for r in regions]
+    else:
+        regions = [bias_corrected(r, draws[0][r.name]) for r in regions]
     estimates = region_posteriors(
         regions,
         thetas,
