@@ -51,7 +51,7 @@ NOISE_FLOOR = 1e-4  # DOLP noise below which a region posterior never goes (fixe
 
 @dataclass
 class RegionData:
-    """Region-mean DOLP over the geometries and its error estimate.
+    r"""Region-mean DOLP over the geometries and its error estimate.
 
     Attributes
     ----------
@@ -77,6 +77,11 @@ class RegionData:
     calibrated : bool
         ``error`` was measured in full by noisy re-simulations (known-PSF self-calibration): the
         posterior then infers no further noise.
+    correlated : ndarray, shape (M,), or None
+        The part of ``error`` that is one error of the whole geometry series (signed, [DOLP]): a
+        fraction of the subtracted bias, which the scene mismatch scales as a whole. The posterior of
+        a calibrated region uses the covariance
+        :math:`\mathrm{diag}(e^2 - c^2) + c\,c^\mathsf{T}`.
     """
 
     name: str
@@ -90,6 +95,7 @@ class RegionData:
     bias_spread: np.ndarray | None = None
     edge_shift: np.ndarray | None = None
     calibrated: bool = False
+    correlated: np.ndarray | None = None
 
 
 @dataclass
@@ -287,11 +293,19 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
     return RegionEstimate(name, params, converged, notes, post.chain, data)
 
 
-def _noise_model(errors, m, fixed, sampler):
+def _covariance(region: RegionData, error) -> np.ndarray:
+    """Error covariance (M, M) of a calibrated region's means [DOLP^2] whose total error per geometry is
+    ``error`` (M,): independent per geometry, plus its :attr:`RegionData.correlated` part shared by the
+    whole series, plus the noise floor."""
+    error = np.asarray(error, float)
+    c = np.zeros_like(error) if region.correlated is None else np.asarray(region.correlated)
+    independent = np.maximum(error**2 - c**2, 0.0) + NOISE_FLOOR**2
+    return np.diag(independent) + np.outer(c, c)
+
+
+def _noise_model(errors, m, sampler):
     """(noise, keywords) of ``sampler`` (:func:`~scatterlab.inversion.sample_posteriors`) for regions with
-    per-geometry errors ``errors`` (K, M): a fixed floor over measured errors, else an inferred noise."""
-    if fixed:
-        return NOISE_FLOOR, {"systematic": errors}
+    per-geometry errors ``errors`` (K, M) that leave a noise level to infer."""
     if m < 3:  # (n, kappa) from two geometries: no data left to infer a noise level
         return max(float(errors.max()), NOISE_FLOOR), {}
     if "systematic" in inspect.signature(sampler).parameters:
@@ -353,7 +367,13 @@ def region_posteriors(
             idx = np.flatnonzero(calibrated == fixed)
             if idx.size == 0:
                 continue
-            noise, extra = _noise_model(errors[idx], thetas.size, fixed, sample_posteriors)
+            if fixed:
+                noise, extra = (
+                    None,
+                    {"covariance": np.stack([_covariance(regions[k], errors[k]) for k in idx])},
+                )
+            else:
+                noise, extra = _noise_model(errors[idx], thetas.size, sample_posteriors)
             for k, p in zip(
                 idx, sample_posteriors(means[idx], thetas, thetas, noise, rng, **kw, **extra)
             ):

@@ -295,7 +295,8 @@ def bias_corrected(region: RegionData, bias) -> RegionData:
     region : RegionData
         Uncorrected region means.
     bias : BiasEstimate or array_like, shape (M,)
-        From :func:`restoration_bias` (a plain array is a deterministic bias: half of it kept as error).
+        From :func:`restoration_bias` (a plain array is a deterministic bias:
+        :data:`SYSTEMATIC_FRACTION` of it kept as error).
 
     Returns
     -------
@@ -324,6 +325,7 @@ def bias_corrected(region: RegionData, bias) -> RegionData:
             bias=bias.mean,
             bias_spread=bias.spread,
             calibrated=True,
+            correlated=bias.fraction * bias.mean,
         )
     scale = 1.0 if bias.ratio is None else 1.0 / bias.ratio  # d(corrected mean) / d(mean)
     if bias.ratio is not None:

@@ -376,3 +376,37 @@ def test_known_psf_replicates_measure_the_noise_of_a_region_mean():
     )["paint"]
     assert bias.replicates == KNOWN_PSF_REPLICATES and bias.edge_shift is not None
     assert 0.3 < bias.spread[0] / truth < 2.8, (bias.spread[0], truth)
+
+
+def test_a_calibrated_region_gets_its_measured_covariance_and_no_inferred_noise(monkeypatch):
+    """A region whose error the known-PSF re-simulations measured is sampled with a fixed covariance: its
+    correlated part c c^T (the kept fraction of the bias, one error of the whole series), the rest of its
+    error on the diagonal, and the noise floor; no noise level is inferred. An uncalibrated region in the
+    same call keeps the inferred noise."""
+    import scatterlab.inversion as inv
+    from scatterlab.characterization.estimation import NOISE_FLOOR, RegionData, region_posteriors
+
+    calls = []
+
+    def fake(dolp, theta_i, theta_r, noise=None, rng=None, *, covariance=None, **kw):
+        calls.append(dict(noise=noise, covariance=covariance, noise_bounds=kw.get("noise_bounds")))
+        return [None] * len(dolp)
+
+    monkeypatch.setattr(inv, "sample_posteriors", fake)
+    monkeypatch.setattr(
+        "scatterlab.characterization.estimation._summarise", lambda name, post, data: name
+    )
+    th = np.radians([30.0, 40.0, 50.0, 60.0])
+    err, c = np.array([0.003, 0.002, 0.002, 0.004]), np.array([-0.001, -0.001, 0.0005, -0.002])
+    calibrated = RegionData(
+        "paint", np.full(4, 0.5), err, err, 0 * err, 100, calibrated=True, correlated=c
+    )
+    free = RegionData("metal", np.full(4, 0.05), err, err, 0 * err, 100)
+    out = region_posteriors([calibrated, free], th, 0.3, np.random.default_rng(0))
+    assert out == ["paint", "metal"]
+    inferred, fixed = calls
+    assert inferred["noise"] is None and inferred["noise_bounds"] is not None
+    assert fixed["noise"] is None
+    want = np.diag(err**2 - c**2 + NOISE_FLOOR**2) + np.outer(c, c)
+    np.testing.assert_allclose(fixed["covariance"][0], want, rtol=1e-12)
+    np.testing.assert_allclose(np.sqrt(np.diag(fixed["covariance"][0])), np.hypot(err, NOISE_FLOOR))

@@ -1,0 +1,35 @@
+"""The coverage study's report says which way a family misses its nominal rate, and how wide its intervals
+are (hand-made rows with known answers)."""
+
+from studies.characterization_coverage import coverage, direction, median_widths
+
+
+def _trial(covers68, covers95, lo, hi):
+    flags = {"ci68": covers68, "ci95": covers95, "interval68": [lo, hi]}
+    return {"metal": "gold", "no_turbulence/paint/n": flags}
+
+
+def test_a_family_covering_every_truth_over_covers_and_its_width_is_the_median():
+    trials = [_trial(True, True, 0.0, 1.0 + k) for k in range(24)]
+    cov = coverage(trials)
+    row = cov["no_turbulence/paint/n"]
+    assert row["ci68"]["rate"] == 1.0 and not row["ci68"]["within_2se"]
+    assert direction(row) == "over-covers"
+    assert median_widths(trials)["no_turbulence/paint/n"] == 12.5
+
+
+def test_a_family_missing_most_truths_under_covers():
+    trials = [_trial(k < 6, k < 12, 0.0, 0.1) for k in range(24)]
+    assert direction(coverage(trials)["no_turbulence/paint/n"]) == "under-covers"
+
+
+def test_metal_coverage_is_split_by_metal():
+    from studies.characterization_coverage import metal_coverage
+
+    def t(metal, covers):
+        return {"metal": metal, "no_turbulence/metal/n": {"ci68": covers, "ci95": True}}
+
+    out = metal_coverage([t("gold", False), t("gold", False), t("iron", True), t("iron", False)])
+    assert out["families"] == ["no_turbulence/metal/n"]
+    assert out["metals"]["gold"] == {"trials": 2, "no_turbulence/metal/n": 0.0}
+    assert out["metals"]["iron"]["no_turbulence/metal/n"] == 0.5
