@@ -18,10 +18,10 @@ Last full run (seed 20101210; 24 Nov 2026), 68 % / 95 % coverage:
 - metals: without turbulence 0.46 / 0.92 (n and kappa; seed 1: 0.42 / 0.96), corrected n 0.88 / 1.00 and
   kappa 0.67 / 1.00 (seed 1: 0.92 / 1.00, 0.62 / 1.00). A metal's DOLP at 30-60 deg does not separate n
   from kappa: its intervals run along a ridge as far as the prior lets them (median 68 % widths 1.6 and 8
-  without turbulence, 3.2 and 10.7 corrected), so their coverage of a fixed metal follows where it sits on the ridge, not the error model:
-  without turbulence iron, titanium and aluminium were covered in 21 of 31 scenes (both seeds), copper and
-  gold in 0 of 17 with DOLP z-scores within +-1 (their intervals sit at high kappa, where the uniform
-  prior has most of the ridge). The report tabulates this per metal.
+  without turbulence, 3.2 and 10.7 corrected), so their coverage of a fixed metal follows where it sits on
+  the ridge, not the error model: without turbulence iron, titanium and aluminium were covered in 21 of 31
+  scenes (both seeds), copper and gold in 0 of 17 with DOLP z-scores within +-1 (their intervals sit at high
+  kappa, where the uniform prior has most of the ridge). The report tabulates this per metal.
 
 Before the bootstrap (re-simulation through the data's own PSF estimate, plate zoom 2) the corrected paint's
 kappa covered 0.08 / 0.67.
