@@ -211,5 +211,7 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
                     dolp_bias_corrected=r.data.bias.tolist(),
                     dolp_bias_spread=r.data.bias_spread.tolist(),
                 )
+                if r.joint is not None:
+                    cs[f"posterior_{name}"]["joint"] = r.joint
         result.estimates[key] = est
         result.metrics[key] = cs

@@ -296,6 +296,17 @@ def acceptance_checks(cfg, results) -> list:
                             bool(e["covers68"]),
                         )
                     )
+                j = post.get("joint")
+                if j is not None:
+                    out.append(
+                        (
+                            f"{p.metal}: {region} truth inside the joint 68 % (n, kappa) "
+                            "likelihood-ratio region (no turbulence)",
+                            f"Delta chi^2 {j['delta_chi2']:.2f} (68 % threshold "
+                            f"{j['threshold68']:.2f})",
+                            bool(j["covers68"]),
+                        )
+                    )
         for case, _ in [(c, None) for c in cfg.d_over_r0]:
             key = f"D_r0_{case:g}"
             cor, deg = m.get(f"{key}_corrected", {}), m.get(f"{key}_degraded", {})

@@ -410,3 +410,29 @@ def test_a_calibrated_region_gets_its_measured_covariance_and_no_inferred_noise(
     want = np.diag(err**2 - c**2 + NOISE_FLOOR**2) + np.outer(c, c)
     np.testing.assert_allclose(fixed["covariance"][0], want, rtol=1e-12)
     np.testing.assert_allclose(np.sqrt(np.diag(fixed["covariance"][0])), np.hypot(err, NOISE_FLOOR))
+
+
+def test_a_metal_the_data_do_not_separate_is_flagged_and_its_truth_is_in_the_joint_region():
+    """Copper at 30-60 deg: its DOLP fixes about Re(1/eta), so the posterior runs along a ridge and the
+    region's note says that the marginal intervals follow the prior; the exact data put the truth at the
+    best fit, inside the joint likelihood-ratio region (Delta chi^2 ~ 0). A paint in the same call is
+    determined and gets no such note."""
+    from scatterlab.characterization.estimation import RegionData, region_posteriors
+    from scatterlab.inversion import model_dolp
+
+    th = np.radians([30.0, 40.0, 50.0, 60.0])
+    regions = [
+        RegionData(
+            name, np.asarray(model_dolp(n, k, 0.3, th, th), float), e, e, np.zeros(4), 100, (n, k)
+        )
+        for name, n, k, e in (
+            ("metal", 0.61, 10.4, np.full(4, 3e-3)),
+            ("paint", 1.5, 0.1, np.full(4, 2e-3)),
+        )
+    ]
+    metal, paint = region_posteriors(regions, th, 0.3, np.random.default_rng(3), n_steps=400)
+    assert min(metal.parameters[q]["contraction"] for q in ("n", "kappa")) < 0.9
+    assert any("only weakly" in w for w in metal.warnings), metal.warnings
+    assert metal.joint["covers68"] and metal.joint["delta_chi2"] < 0.5, metal.joint
+    assert paint.parameters["kappa"]["contraction"] > 0.99
+    assert not any("only weakly" in w for w in paint.warnings)
