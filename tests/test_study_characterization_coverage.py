@@ -33,3 +33,37 @@ def test_metal_coverage_is_split_by_metal():
     assert out["families"] == ["no_turbulence/metal/n"]
     assert out["metals"]["gold"] == {"trials": 2, "no_turbulence/metal/n": 0.0}
     assert out["metals"]["iron"]["no_turbulence/metal/n"] == 0.5
+
+
+def test_weakly_determined_trials_leave_the_marginal_family_and_too_few_are_not_judged():
+    """A marginal interval is judged over the trials that determined its parameter: 14 weakly determined
+    misses are left out of a family whose 10 determined trials cover at 0.7; a family with 9 judged trials
+    is not judged; the joint region (always judged) of the same trials misses its rate."""
+    from studies.characterization_coverage import passes
+
+    def t(k):
+        weak = k < 14
+        return {
+            "metal": "copper",
+            "no_turbulence/metal/n": {
+                "ci68": not weak and k < 21,
+                "ci95": not weak,
+                "determined": not weak,
+                "interval68": [0.0, 1.0],
+            },
+            "no_turbulence/metal/kappa": {
+                "ci68": True,
+                "ci95": True,
+                "determined": k >= 15,
+                "interval68": [0.0, 1.0],
+            },
+            "no_turbulence/metal/joint": {"ci68": k < 5, "ci95": k < 10, "determined": True},
+        }
+
+    cov = coverage([t(k) for k in range(24)])
+    n = cov["no_turbulence/metal/n"]
+    assert (n["trials"], n["weak"], n["ci68"]["rate"]) == (10, 14, 0.7) and passes(n)
+    kappa = cov["no_turbulence/metal/kappa"]
+    assert kappa["trials"] == 9 and not kappa["judged"] and passes(kappa)
+    joint = cov["no_turbulence/metal/joint"]
+    assert joint["trials"] == 24 and not passes(joint) and direction(joint) == "under-covers"

@@ -85,7 +85,8 @@ class RegionData:
         The part of ``error`` that is one error of the whole geometry series (signed, [DOLP]): a
         fraction of the subtracted bias, which the scene mismatch scales as a whole. The posterior of
         a calibrated region uses the covariance
-        :math:`\mathrm{diag}(e^2 - c^2) + c\,c^\mathsf{T}`.
+        :math:`\mathrm{diag}(e^2 - c^2) + c\,c^\mathsf{T}`; any other region the same with an
+        inferred noise added to the diagonal.
     """
 
     name: str
@@ -340,6 +341,13 @@ def _covariance(region: RegionData, error) -> np.ndarray:
     return np.diag(independent) + np.outer(c, c)
 
 
+def _common(region: RegionData) -> np.ndarray:
+    """The error (M,) that ``region``'s whole geometry series shares [DOLP] (zeros when none)."""
+    if region.correlated is None:
+        return np.zeros_like(region.mean, dtype=float)
+    return np.abs(np.asarray(region.correlated, float))
+
+
 def _noise_model(errors, m, sampler):
     """(noise, keywords) of ``sampler`` (:func:`~scatterlab.inversion.sample_posteriors`) for regions with
     per-geometry errors ``errors`` (K, M) that leave a noise level to infer."""
@@ -410,7 +418,11 @@ def region_posteriors(
                     {"covariance": np.stack([_covariance(regions[k], errors[k]) for k in idx])},
                 )
             else:
-                noise, extra = _noise_model(errors[idx], thetas.size, sample_posteriors)
+                common = np.stack([_common(regions[k]) for k in idx])
+                independent = np.sqrt(np.maximum(errors[idx] ** 2 - common**2, 0.0))
+                noise, extra = _noise_model(independent, thetas.size, sample_posteriors)
+                if np.any(common):
+                    extra["correlated"] = common
             for k, p in zip(
                 idx, sample_posteriors(means[idx], thetas, thetas, noise, rng, **kw, **extra)
             ):

@@ -18,6 +18,11 @@ Model and likelihood
       \mathrm{diag}(t^2)`,
       factorised (Cholesky) once.
 
+    * ``correlated`` ((M,)): one error :math:`c\,z` shared by the whole series (:math:`z \sim N(0, 1)`,
+      a scale error of a correction applied to all geometries), added to any of the above:
+      :math:`V + c\,c^\mathsf{T}`; with a diagonal :math:`V` the likelihood uses the Sherman-Morrison form,
+      so an inferred noise stays cheap.
+
     NaN measurements are left out (their rows and columns of :math:`V` too).
 
 Priors
@@ -369,7 +374,18 @@ class DolpLogPosterior:
     """
 
     def __init__(
-        self, forward, y, lo, hi, *, fit_sigma, log_kappa, noise, systematic=None, covariance=None
+        self,
+        forward,
+        y,
+        lo,
+        hi,
+        *,
+        fit_sigma,
+        log_kappa,
+        noise,
+        systematic=None,
+        covariance=None,
+        correlated=None,
     ):
         from scipy.linalg import cholesky
 
@@ -379,8 +395,12 @@ class DolpLogPosterior:
         self.index, self.y, self.m = np.flatnonzero(mask), y[mask], int(mask.sum())
         self.syst2 = np.zeros(self.m) if systematic is None else systematic[mask] ** 2
         self.chol = None
+        self.c = None if correlated is None else np.asarray(correlated, float)[mask]
         if covariance is not None:
-            self.chol = cholesky(covariance[np.ix_(mask, mask)] + np.diag(self.syst2), lower=True)
+            full = covariance[np.ix_(mask, mask)] + np.diag(self.syst2)
+            if self.c is not None:
+                full = full + np.outer(self.c, self.c)
+            self.chol = cholesky(full, lower=True)
         self.var = None if noise is None else noise**2 + self.syst2
 
     def physical(self, x):
@@ -404,11 +424,19 @@ class DolpLogPosterior:
             z = solve_triangular(self.chol, r.T, lower=True)
             return -0.5 * np.sum(z * z, 0)
         if s is None:
-            return -0.5 * np.sum(r * r / self.var, -1)
-        v = (
-            s[:, None] ** 2 + self.syst2
-        )  # log-uniform prior on s is uniform in log s: no Jacobian term
-        return -0.5 * np.sum(r * r / v + np.log(v), -1)
+            v = np.broadcast_to(self.var, r.shape)
+        else:
+            v = (
+                s[:, None] ** 2 + self.syst2
+            )  # log-uniform prior on s is uniform in log s: no Jacobian
+        out = np.sum(r * r / v + np.log(v), -1)
+        if self.c is not None:
+            # V = diag(v) + c c^T (Sherman-Morrison): r^T V^-1 r = r^T D^-1 r - (r^T D^-1 c)^2 / (1 + g),
+            # log det V = log det D + log(1 + g), g = c^T D^-1 c
+            g = np.sum(self.c**2 / v, -1)
+            u = np.sum(r * self.c / v, -1)
+            out = out - u**2 / (1 + g) + np.log1p(g)
+        return -0.5 * out
 
     def __call__(self, x):
         x = np.atleast_2d(x)
@@ -438,6 +466,7 @@ class PosteriorProblem:
     log_post: DolpLogPosterior
     lo: np.ndarray  # physical bounds (P,)
     hi: np.ndarray
+    correlated: np.ndarray | None = None
 
     @property
     def P(self) -> int:
@@ -465,6 +494,7 @@ class PosteriorProblem:
             self.phi,
             self.systematic,
             self.covariance,
+            self.correlated,
         ):
             h.update(b"-" if a is None else np.ascontiguousarray(a, float).tobytes())
         meta = {
@@ -503,10 +533,11 @@ def posterior_problem(
     sigma=None,
     systematic=None,
     covariance=None,
+    correlated=None,
     prior: PriorOptions | None = None,
     model_kw=None,
 ) -> PosteriorProblem:
-    """Validate the inputs of :func:`sample_posterior` and build its log posterior (the *start*
+    r"""Validate the inputs of :func:`sample_posterior` and build its log posterior (the *start*
     piece).
 
     Parameters
@@ -523,6 +554,8 @@ def posterior_problem(
         Known systematic DOLP standard deviation per geometry.
     covariance : array (M, M), optional
         Full DOLP error covariance.
+    correlated : array (M,), optional
+        One error shared by the whole series [DOLP]: adds :math:`c\,c^\mathsf{T}` to the covariance.
     prior : PriorOptions, optional
     model_kw : dict, optional
         Keywords of :class:`scatterlab.pbrdf.Model`.
@@ -537,10 +570,17 @@ def posterior_problem(
     model_kw = dict(model_kw or {})
     M = np.size(theta_i)
     noise, systematic, covariance = _check_error_model(noise, systematic, covariance, M)
+    if correlated is not None:
+        correlated = np.asarray(correlated, float)
+        if correlated.shape != (M,) or not np.all(np.isfinite(correlated)):
+            raise ValueError(
+                f"correlated must be an array ({M},) of finite DOLP errors, got {correlated!r}"
+            )
     known = (
         [noise or 0.0]
         + ([] if systematic is None else [float(systematic.max())])
         + ([] if covariance is None else [float(np.sqrt(np.max(np.diag(covariance))))])
+        + ([] if correlated is None else [float(np.abs(correlated).max())])
     )
     margin = max(DOLP_MARGIN, 5 * float(np.sqrt(np.sum(np.square(known)))))
     y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi, margin=margin)
@@ -579,6 +619,7 @@ def posterior_problem(
         noise=noise,
         systematic=systematic,
         covariance=covariance,
+        correlated=correlated,
     )
     return PosteriorProblem(
         y,
@@ -594,6 +635,7 @@ def posterior_problem(
         log_post,
         lo,
         hi,
+        correlated,
     )
 
 
@@ -1051,6 +1093,7 @@ def diagnose(
         systematic=problem.systematic,
         covariance=problem.covariance,
         noise_bounds=tuple(problem.prior.noise_bounds) if problem.log_post.infers_noise else None,
+        correlated=problem.correlated,
     )
 
 
@@ -1093,6 +1136,7 @@ class Posterior:
     systematic : ndarray (M,) or None; covariance : ndarray (M, M) or None -- the error model.
     noise_bounds : (low, high) or None -- prior range of the inferred noise (None when it was not
     inferred).
+    correlated : ndarray (M,) or None -- the error shared by the whole series.
     """
 
     chain: np.ndarray
@@ -1124,6 +1168,7 @@ class Posterior:
     systematic: np.ndarray | None = None
     covariance: np.ndarray | None = None
     noise_bounds: tuple | None = None
+    correlated: np.ndarray | None = None
 
     @property
     def samples(self) -> np.ndarray:
@@ -1309,6 +1354,7 @@ class Posterior:
             noise=self.noise if self.noise_bounds is None else None,
             systematic=self.systematic,
             covariance=self.covariance,
+            correlated=self.correlated,
         )
         grid = None
         if like.infers_noise:
@@ -1327,6 +1373,8 @@ class Posterior:
         """Standard deviation (M,) of the DOLP errors of the likelihood (noise median with an
         inferred noise)."""
         syst2 = 0.0 if self.systematic is None else self.systematic**2
+        if self.correlated is not None:
+            syst2 = syst2 + self.correlated**2
         if self.covariance is not None:
             return np.sqrt(np.diag(self.covariance) + syst2)
         s = self.noise if self.noise is not None else float(np.median(self.noise_chain))
@@ -1475,10 +1523,15 @@ class Posterior:
         idx = rng.integers(0, self.samples.shape[0], n_draws)
         y = DolpForward(ti, tr, ph, **self.model_kw)(self.samples[idx])
         if with_noise:
-            if new and (self.systematic is not None or self.covariance is not None):
+            if new and any(
+                e is not None for e in (self.systematic, self.covariance, self.correlated)
+            ):
                 raise ValueError(
-                    "with_noise at new geometries is undefined with a systematic or covariance"
+                    "with_noise at new geometries is undefined with a systematic, covariance or "
+                    "correlated error"
                 )
+            if self.correlated is not None:
+                y = y + rng.standard_normal(y.shape[:-1] + (1,)) * self.correlated
             if self.covariance is not None:
                 C = self.covariance + np.diag(
                     0.0 if self.systematic is None else self.systematic**2
@@ -1507,13 +1560,14 @@ def sample_posterior(
     sigma=None,
     systematic=None,
     covariance=None,
+    correlated=None,
     prior: PriorOptions | None = None,
     sampler: SamplerOptions | None = None,
     backend=None,
     name: str = "posterior",
     **options,
 ) -> Posterior:
-    """Sample the posterior of (n, kappa, sigma) given DOLP at M geometries.
+    r"""Sample the posterior of (n, kappa, sigma) given DOLP at M geometries.
 
     Three pieces: *start* (:func:`posterior_problem`, the least-squares minima, :func:`start_walkers`),
     *run until converged* (:func:`run_ensembles`) and *diagnose* (:func:`diagnose`).
@@ -1536,6 +1590,9 @@ def sample_posterior(
         Known systematic DOLP error standard deviation per geometry, added in quadrature.
     covariance : array (M, M), optional
         Full DOLP error covariance (correlated errors across geometries), used instead of ``noise``.
+    correlated : array (M,), optional
+        One error shared by the whole series [DOLP] (a correction's scale error), with any of the
+        above: adds :math:`c\,c^\mathsf{T}` to the error covariance.
     prior : PriorOptions, optional
         Or the keywords ``bounds``, ``kappa_prior``, ``noise_bounds``.
     sampler : SamplerOptions, optional
@@ -1559,7 +1616,14 @@ def sample_posterior(
     """
     rng = np.random.default_rng(rng)
     prior, opts, model_kw = _resolve_options(prior, sampler, dict(options))
-    given = dict(phi=phi, sigma=sigma, systematic=systematic, covariance=covariance, prior=prior)
+    given = dict(
+        phi=phi,
+        sigma=sigma,
+        systematic=systematic,
+        covariance=covariance,
+        correlated=correlated,
+        prior=prior,
+    )
     problem = posterior_problem(dolp, theta_i, theta_r, noise, model_kw=model_kw, **given)
     opts.validate(problem.ndim)
     backends, resumed = _open_backends(backend, name, problem, opts)
@@ -1618,6 +1682,7 @@ def sample_posteriors(
     backend=None,
     systematic=None,
     covariance=None,
+    correlated=None,
     **kw,
 ) -> list[Posterior]:
     """:func:`sample_posterior` for each row of ``dolp`` (K, M) -- regions or pixels -- through an
@@ -1647,6 +1712,7 @@ def sample_posteriors(
         Directory for one HDF5 checkpoint per problem.
     systematic : float, array (M,) or (K, M), optional
     covariance : array (M, M) or (K, M, M), optional
+    correlated : array (M,) or (K, M), optional
     **kw
         Other keywords of :func:`sample_posterior`.
 
@@ -1663,7 +1729,10 @@ def sample_posteriors(
     tasks = []
     for k, row in enumerate(y):
         kk = dict(
-            kw, systematic=_per_problem(systematic, k, 1), covariance=_per_problem(covariance, k, 2)
+            kw,
+            systematic=_per_problem(systematic, k, 1),
+            covariance=_per_problem(covariance, k, 2),
+            correlated=_per_problem(correlated, k, 1),
         )
         if (
             backend is not None

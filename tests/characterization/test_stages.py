@@ -268,7 +268,11 @@ def test_ratio_correction_scales_the_data_error_with_the_mean():
     """A paint corrected by a ratio (restored = ratio x true) has its mean divided by the ratio, so its
     statistical and edge errors are divided by it too; the equivalent difference keeps half as systematic."""
     from scatterlab.characterization.estimation import RegionData
-    from scatterlab.characterization.self_calibration import BiasEstimate, bias_corrected
+    from scatterlab.characterization.self_calibration import (
+        BLIND_RATIO_CORRELATED_FRACTION,
+        BiasEstimate,
+        bias_corrected,
+    )
 
     stat, edge = np.array([0.01, 0.02]), np.array([0.0, 0.01])
     r = RegionData("paint", np.array([0.4, 0.3]), np.hypot(stat, edge), stat, edge, 80)
@@ -276,8 +280,13 @@ def test_ratio_correction_scales_the_data_error_with_the_mean():
     c = bias_corrected(r, BiasEstimate(np.zeros(2), np.zeros(2), 1, ratio))
     np.testing.assert_allclose(c.mean, [0.8, 0.5])
     np.testing.assert_allclose(c.statistical, stat / ratio)
-    shift = r.mean - r.mean / ratio  # the equivalent bias, half of it kept
-    np.testing.assert_allclose(c.error, np.sqrt((r.error / ratio) ** 2 + (0.5 * shift) ** 2))
+    shift = r.mean - r.mean / ratio  # the equivalent bias: half of it kept per geometry, and
+    # BLIND_RATIO_CORRELATED_FRACTION of it as one error of the whole series
+    f = BLIND_RATIO_CORRELATED_FRACTION
+    np.testing.assert_allclose(c.correlated, f * shift)
+    np.testing.assert_allclose(
+        c.error, np.sqrt((r.error / ratio) ** 2 + (0.5 * shift) ** 2 + (f * shift) ** 2)
+    )
 
 
 def test_model_error_is_chosen_by_the_regions_class(monkeypatch):
@@ -388,8 +397,10 @@ def test_a_calibrated_region_gets_its_measured_covariance_and_no_inferred_noise(
 
     calls = []
 
-    def fake(dolp, theta_i, theta_r, noise=None, rng=None, *, covariance=None, **kw):
-        calls.append(dict(noise=noise, covariance=covariance, noise_bounds=kw.get("noise_bounds")))
+    def fake(
+        dolp, theta_i, theta_r, noise=None, rng=None, *, covariance=None, systematic=None, **kw
+    ):
+        calls.append(dict(noise=noise, covariance=covariance, systematic=systematic, **kw))
         return [None] * len(dolp)
 
     monkeypatch.setattr(inv, "sample_posteriors", fake)
@@ -401,11 +412,16 @@ def test_a_calibrated_region_gets_its_measured_covariance_and_no_inferred_noise(
     calibrated = RegionData(
         "paint", np.full(4, 0.5), err, err, 0 * err, 100, calibrated=True, correlated=c
     )
-    free = RegionData("metal", np.full(4, 0.05), err, err, 0 * err, 100)
+    # a blind region whose correction shares one error c2 over the series: c2 goes to the sampler as the
+    # correlated error, the rest of its error per geometry as the systematic beside the inferred noise
+    c2 = np.array([0.001, -0.001, 0.0015, 0.002])
+    free = RegionData("metal", np.full(4, 0.05), err, err, 0 * err, 100, correlated=c2)
     out = region_posteriors([calibrated, free], th, 0.3, np.random.default_rng(0))
     assert out == ["paint", "metal"]
     inferred, fixed = calls
     assert inferred["noise"] is None and inferred["noise_bounds"] is not None
+    np.testing.assert_allclose(inferred["correlated"][0], np.abs(c2))
+    np.testing.assert_allclose(inferred["systematic"][0], np.sqrt(err**2 - c2**2))
     assert fixed["noise"] is None
     want = np.diag(err**2 - c**2 + NOISE_FLOOR**2) + np.outer(c, c)
     np.testing.assert_allclose(fixed["covariance"][0], want, rtol=1e-12)

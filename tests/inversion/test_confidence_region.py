@@ -107,3 +107,42 @@ def test_with_an_inferred_noise_the_region_keeps_its_rate_with_four_geometries()
     joint = np.array([[p.confidence_region(truth, lv) for lv in (0.68, 0.95)] for p in posts])
     se = np.sqrt(np.array([0.68 * 0.32, 0.95 * 0.05]) / len(posts))
     assert np.all(np.abs(joint.mean(0) - [0.68, 0.95]) < 3 * se), joint.mean(0)
+
+
+@pytest.mark.parametrize("inferred", [True, False])
+def test_a_series_wide_error_enters_the_likelihood_as_its_rank_one_covariance(inferred):
+    """Sherman-Morrison form of V = diag(s^2 + t^2) + c c^T (inferred noise) and the Cholesky form of
+    C + c c^T (fixed covariance) against scipy's dense multivariate normal (which keeps the 2 pi term)."""
+    from scipy.stats import multivariate_normal
+
+    from scatterlab.inversion.forward import DolpForward
+    from scatterlab.inversion.posterior import DolpLogPosterior
+
+    f = DolpForward(THETA, THETA, sigma=SIGMA)
+    rng = np.random.default_rng(8)
+    y = f(np.array([[1.5, 0.3]]))[0] + 0.01 * rng.standard_normal(4)
+    c, t = np.array([0.02, -0.03, 0.01, 0.04]), np.array([0.003, 0.004, 0.002, 0.001])
+    pts, s = np.array([[1.4, 0.2], [1.6, 0.5]]), np.array([0.005, 0.02])
+    cov = None if inferred else np.diag([1e-4, 4e-4, 9e-4, 1e-4]) + 5e-5
+    lp = DolpLogPosterior(
+        f,
+        y,
+        None,
+        None,
+        fit_sigma=False,
+        log_kappa=False,
+        noise=None,
+        systematic=t,
+        covariance=cov,
+        correlated=c,
+    )
+    got = lp.log_likelihood(f(pts), s if inferred else None)
+    dense = [
+        (np.diag(s[k] ** 2 + t**2) if inferred else cov + np.diag(t**2)) + np.outer(c, c)
+        for k in range(2)
+    ]
+    want = [multivariate_normal(f(pts)[k], dense[k]).logpdf(y) for k in range(2)]
+    if inferred:  # the log determinant varies with s: only the 2 pi term is dropped
+        np.testing.assert_allclose(got - want, 0.5 * 4 * np.log(2 * np.pi), rtol=1e-10)
+    else:  # a fixed covariance drops its whole normalisation: differences between points agree
+        np.testing.assert_allclose(got[0] - got[1], want[0] - want[1], rtol=1e-10)
