@@ -1248,12 +1248,12 @@ class Posterior:
 
         :math:`\Delta(p) = 2\,[\max_q \log L(q) - \log L(p)]`, with an inferred noise profiled out
         (maximised over its prior range :attr:`noise_bounds`) at each point. By Wilks' theorem
-        :math:`\Delta` at the truth is close to :math:`\chi^2_P`, so :meth:`confidence_region`
-        :math:`\{p : \Delta(p) \le \chi^2_P(\text{level})\}` covers a *fixed* truth at its
-        nominal rate -- also where the data determine only a combination of n and kappa and the
-        marginal credible intervals of :meth:`interval` follow the prior (see :meth:`contraction`).
-        The best fit is the chain's and the least-squares minima's best point, polished by
-        Nelder-Mead.
+        :math:`\Delta` at the truth is close to :math:`\chi^2_P` (with an inferred noise, see
+        :meth:`region_threshold`), so :meth:`confidence_region` :math:`\{p : \Delta(p) \le t\}`
+        covers a *fixed* truth at its nominal rate -- also where the data determine only a
+        combination of n and kappa and the marginal credible intervals of :meth:`interval` follow
+        the prior (see :meth:`contraction`). The best fit is the chain's and the least-squares
+        minima's best point, polished by Nelder-Mead.
 
         Parameters
         ----------
@@ -1278,8 +1278,8 @@ class Posterior:
         nll = self._profile_nll(P)
         starts = [self.samples[np.argmax(self.log_prob.ravel()), :P]]
         starts += [np.array([f.n, f.kappa, f.sigma][:P], float).ravel() for f in self.least_squares]
-        best = min(float(nll(s[None])[0]) for s in starts)
-        x0 = min(starts, key=lambda s: float(nll(s[None])[0]))
+        values = nll(np.stack(starts))
+        x0, best = starts[int(np.argmin(values))], float(np.min(values))
 
         def boxed(x):
             return float(nll(x[None])[0]) if np.all((x >= lo) & (x <= hi)) else np.inf
@@ -1364,8 +1364,9 @@ class Posterior:
             f = forward(np.asarray(x, float)[:, :P])
             if grid is None:
                 return -like.log_likelihood(f, None)
-            ll = np.stack([like.log_likelihood(f, np.full(len(f), s)) for s in grid])
-            return -ll.max(0)
+            # every (point, noise) pair in one vectorised call: rows point-major, (K * G, M)
+            ll = like.log_likelihood(np.repeat(f, grid.size, axis=0), np.tile(grid, len(f)))
+            return -ll.reshape(len(f), grid.size).max(1)
 
         return nll
 
