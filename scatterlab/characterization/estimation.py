@@ -322,12 +322,22 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
     if diag.get("multimodal"):
         notes.append("the posterior has several modes: the median lies between them")
     if data.bias is not None and np.nanmax(np.abs(data.bias)) > LARGE_CORRECTION:
-        notes.append(
+        moved = (
             f"the self-calibration moved this region's DOLP by up to "
-            f"{np.nanmax(np.abs(data.bias)):.2f}: the restoration lost much of its polarization, and a "
-            "re-simulation of the estimated plate recovers only part of such a loss "
-            "(studies/characterization_coverage.py), so the interval may be too narrow"
+            f"{np.nanmax(np.abs(data.bias)):.2f}: the restoration lost much of its polarization"
         )
+        if data.calibrated:
+            notes.append(
+                moved
+                + "; the error is the re-simulations' spread plus a part of the correction shared "
+                "by all geometries, calibrated on simulated scenes (studies/characterization_coverage.py)"
+            )
+        else:
+            notes.append(
+                moved
+                + ", and a re-simulation of a plate estimated from these data recovers only part "
+                "of such a loss (studies/characterization_coverage.py), so the interval may be too narrow"
+            )
     return RegionEstimate(name, params, converged, notes, post.chain, data, joint)
 
 

@@ -104,8 +104,11 @@ def _pixel_stats(maps, masks, truths):
     return out
 
 
-def _self_calibrated(result, case, kind, regions, thetas, cfg, rng, sel, margin, executor):
-    """Regions with the re-simulated restoration bias subtracted (:mod:`self_calibration`)."""
+def _self_calibrated(
+    result, case, kind, regions, thetas, cfg, rng, sel, margin, executor, reference=None
+):
+    """Regions with the re-simulated restoration bias subtracted (:mod:`self_calibration`); a turbulent
+    image's bootstrap re-simulates the ``reference`` plate (the no-turbulence image's) when given."""
     from scatterlab.characterization.self_calibration import bias_corrected, restoration_bias
     from scatterlab.deconvolution import PRIOR_SETS, classify_dolp, resample_psf
 
@@ -133,6 +136,7 @@ def _self_calibrated(result, case, kind, regions, thetas, cfg, rng, sel, margin,
         blind=d_over_r0 is not None,
         d_over_r0=d_over_r0,
         replicates=cfg.calibration_replicates,
+        plate=None if d_over_r0 is None else reference,
         executor=executor,
     )
     return [bias_corrected(r, bias[r.name]) for r in regions]
@@ -158,6 +162,7 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
     None
     """
     from scatterlab.characterization.pipeline import image_kinds, interior
+    from scatterlab.characterization.self_calibration import estimated_plate
 
     obs, labels, plate = result.observations, result.labels, result.plate
     thetas = np.array([o.theta for o in obs])
@@ -172,6 +177,7 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
         "paint": (plate.paint_n, plate.paint_kappa),
         "metal": (plate.metal_n, plate.metal_kappa),
     }
+    reference = None  # the plate the no-turbulence image shows (first in image_kinds)
     for key, case, kind in image_kinds(cfg):
         cs = _image_errors(obs, case, kind, sel)
         if priors:
@@ -189,8 +195,12 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
                 for r in ("paint", "metal")
             ]
             regions = _self_calibrated(
-                result, case, kind, regions, thetas, cfg, rng, sel, margin, executor
+                result, case, kind, regions, thetas, cfg, rng, sel, margin, executor, reference
             )
+            if case == "no_turbulence":
+                # the turbulent images' bootstraps re-simulate this plate: their own DOLP, diluted by
+                # the metal's halo, would give a brighter paint that a re-simulation dilutes less
+                reference = estimated_plate(regions, thetas, cfg.sigma_known)
             est["regions"] = region_posteriors(
                 regions,
                 thetas,

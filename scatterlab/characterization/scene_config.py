@@ -18,7 +18,7 @@ priors = "ch7"                        # DOLP prior set for the classification (c
 estimate = ["classes", "n_kappa", "posterior"]   # what to compute (leave out what is not needed)
 sigma_known = 0.3                     # roughness used by the n, kappa inversion (the reference measured it)
 posterior_steps = 1500
-calibration_replicates = 2            # re-simulations per geometry that calibrate a blind restoration's bias
+calibration_replicates = 4            # re-simulations per geometry that calibrate a blind restoration's bias
 model_error = false                   # add the pBRDF's DOLP model error measured against the MoM (issue 17) to
                                       # the region errors: off for simulations rendered by the pBRDF itself
 seed = 20101210
@@ -102,7 +102,7 @@ class SceneConfig:
     estimate: list = field(default_factory=lambda: list(ESTIMATES))
     sigma_known: float = 0.3
     posterior_steps: int = 1500
-    calibration_replicates: int = 2
+    calibration_replicates: int = 4
     model_error: bool = False
     seed: int = 20101210
     plate_zoom: float = 4.0
