@@ -252,7 +252,8 @@ def restoration_bias(
         The scene to re-simulate (materials; the layout is ``class_map``), from a reference image: the
         no-turbulence image's self-calibrated regions (:func:`estimated_plate`). Default: estimated from
         ``regions`` themselves, in :data:`CALIBRATION_PASSES` passes for a bootstrap -- which a paint's
-        diluted DOLP misleads (module docstring).
+        diluted DOLP misleads (module docstring). With two or more replicates a paint's ratio correction
+        is then :attr:`BiasEstimate.measured`.
     executor : optional
 
     Returns
@@ -290,9 +291,10 @@ def restoration_bias(
             regions, out, labels, interior, margin, thetas, R, bootstrap, known_psf=not blind
         )
         current = [bias_corrected(r, bias[r.name]) for r in regions]
-    if bootstrap and reference:
+    if bootstrap and reference and R > 1:
         # the reference plate removes the self-consistent under-correction: no scene-mismatch fraction per
-        # geometry for a ratio, a smaller common one (module docstring)
+        # geometry for a ratio, a smaller common one (module docstring). One replicate has no spread, so
+        # it measures no noise: its correction keeps the data's own error terms and the wider fractions
         bias = {
             k: replace(b, fraction=0.0, common=REFERENCE_RATIO_COMMON_FRACTION, measured=True)
             if b.ratio is not None

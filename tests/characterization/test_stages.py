@@ -559,3 +559,21 @@ def test_a_bootstrap_on_a_reference_plate_re_simulates_that_plate_once():
     # the metal's difference keeps the data's own error terms and the inferred noise
     m = bias_corrected(regions[1], bias["metal"])
     assert not bias["metal"].measured and not m.calibrated
+    # one replicate has no spread: it measures no noise, so the paint keeps its own error terms
+    one = restoration_bias(
+        regions,
+        labels,
+        th,
+        [None, None],
+        cfg,
+        np.random.default_rng(0),
+        sel,
+        1,
+        blind=True,
+        d_over_r0=12.9,
+        replicates=1,
+        plate=reference,
+        executor=Recorder(),
+    )["paint"]
+    c1 = bias_corrected(regions[0], one)
+    assert not one.measured and not c1.calibrated and np.all(c1.error > regions[0].error / 0.6)
