@@ -65,7 +65,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from scatterlab.deconvolution.priors import dolp_update, map_objective
-from scatterlab.deconvolution.psf_update import gerchberg_saxton, resample_psf
+from scatterlab.deconvolution.psf_update import PupilPhasePSF, gerchberg_saxton, resample_psf
 from scatterlab.polarization import dolp as stokes_dolp
 from scatterlab.polarization import signed_dolp
 
@@ -117,14 +117,22 @@ class PSFOptions:
     Parameters
     ----------
     mode : "em" (Eq. 194, non-parametric), "pupil" (Schulz's pupil-phase model, Gerchberg-Saxton projection,
-        Eqs. 146-150) or "fixed" (known PSF ``psf0``: the object update is Richardson-Lucy).
-    shared : one PSF for all channels (division of amplitude) or one per channel (sequential capture).
+        Eqs. 146-150), "phase" (the same model, its phases maximizing the log-likelihood itself by
+        L-BFGS with the analytic gradient, Schulz's multi-frame method; one PSF per frame, known AOP) or
+        "fixed" (known PSF ``psf0``: the object update is Richardson-Lucy).
+    shared : one PSF for all channels of a frame (division of amplitude) or one per channel (sequential
+        capture).
+    frames : number of frames (Schulz's multi-frame data): the K channels are ``frames`` consecutive groups
+        of K / frames channels, each group one exposure of the same object through its own turbulence.
+        With ``shared`` each frame has one PSF; the object is common to all frames.
     radius : PSF support radius [pixels]; None: a quarter of the smaller data side.
-    gs_steps : Gerchberg-Saxton steps per iteration (``mode="pupil"``).
+    gs_steps : Gerchberg-Saxton steps (``mode="pupil"``) or L-BFGS iterations (``mode="phase"``) per
+        iteration.
     """
 
     mode: str = "em"
     shared: bool = True
+    frames: int = 1
     radius: float | None = None
     gs_steps: int = 5
 
@@ -222,6 +230,7 @@ class EMOptions:
 _KEYWORDS = {
     "psf_mode": ("psf", "mode"),
     "shared_psf": ("psf", "shared"),
+    "frames": ("psf", "frames"),
     "psf_radius": ("psf", "radius"),
     "gs_steps": ("psf", "gs_steps"),
     "aop": ("polarization", "aop"),
@@ -264,7 +273,8 @@ class DeconvolutionResult:
     Attributes
     ----------
     s0, dolp, aop : arrays ``(H, W)`` [counts, -, rad]
-    psfs : array ``(K or 1, Hp, Wp)`` on the object grid (centred, unit sum)
+    psfs : array ``(P, Hp, Wp)`` on the object grid (centred, unit sum): one per frame with a shared PSF
+        (P = ``frames``), else one per channel (P = K)
     classes : int array ``(H, W)`` (index into ``priors``) or None
     loglik : array ``(iterations + 1,)`` Poisson log-likelihood; objective: with the log priors
     iterations : int; notes : list of str; seconds : float [s]
@@ -341,10 +351,12 @@ class _Problem:
     ops: _Ops
     support: np.ndarray  # (Hp, Wp) bool
     D: np.ndarray  # (K,) total counts per channel
+    group: np.ndarray  # (K,) index of each channel's PSF
     model: object  # _StokesBasis or _PerChannel
     opts: EMOptions
     pupil: np.ndarray | None
     notes: list
+    phase_psf: PupilPhasePSF | None = None
 
     @property
     def priors(self) -> tuple:
@@ -363,11 +375,12 @@ class EMState:
 
     Attributes
     ----------
-    h : array ``(K or 1, Hp, Wp)`` -- PSFs (centred, unit sum)
+    h : array ``(P, Hp, Wp)`` -- PSFs (centred, unit sum): one per frame (``frames``, 1 for a single
+        frame) with a shared PSF, else one per channel
     s0, P : arrays ``(Hp, Wp)`` -- S0 [counts] and DOLP
     pred : predicted channel images ``(K, H, W)`` with the OTFs and object spectra (``_State``)
     w : window share ``h^T * 1_window`` (array or 1.0)
-    pupil_phase : array ``(K or 1, n, n)`` [rad] or None (``mode="pupil"``)
+    pupil_phase : array ``(P, n, n)`` [rad] or None (``mode="pupil"``)
     classes : int array ``(H, W)`` or None
     loglik, objective : lists of floats, one per iteration (plus the start)
     """
@@ -394,9 +407,13 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
     K = d.shape[0]
     if th.size != K:
         raise ValueError(f"angles has {th.size} entries for {K} channels")
-    mode, radius = opts.psf.mode, opts.psf.radius
-    if mode not in ("em", "pupil", "fixed"):
-        raise ValueError(f"psf_mode must be 'em', 'pupil' or 'fixed', got {mode!r}")
+    mode, radius, frames = opts.psf.mode, opts.psf.radius, opts.psf.frames
+    if not (isinstance(frames, (int, np.integer)) and frames >= 1 and K % frames == 0):
+        raise ValueError(
+            f"frames must be a positive integer that divides the {K} channels, got {frames!r}"
+        )
+    if mode not in ("em", "pupil", "phase", "fixed"):
+        raise ValueError(f"psf_mode must be 'em', 'pupil', 'phase' or 'fixed', got {mode!r}")
     if opts.window.boundary not in ("reeves", "periodic"):
         raise ValueError(f"boundary must be 'reeves' or 'periodic', got {opts.window.boundary!r}")
     if np.any(np.abs(th) > 2 * np.pi):
@@ -415,8 +432,13 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
             raise ValueError("psf0 must be finite and non-negative with a positive sum (a PSF)")
     if mode == "fixed" and psf0 is None:
         raise ValueError("psf_mode='fixed' needs psf0")
-    if mode == "pupil" and pupil is None:
-        raise ValueError("psf_mode='pupil' needs the pupil (aperture) array")
+    if mode in ("pupil", "phase") and pupil is None:
+        raise ValueError(f"psf_mode={mode!r} needs the pupil (aperture) array")
+    if mode == "phase" and (not opts.psf.shared or opts.polarization.estimate_aop):
+        raise ValueError(
+            "psf_mode='phase' needs one PSF per frame (shared_psf=True) and a known AOP "
+            "(estimate_aop=False)"
+        )
     return d, th
 
 
@@ -455,6 +477,11 @@ def _initial_psfs(psf0, pupil, ops: _Ops, support, radius, nps):
         h = np.asarray(psf0, float)
         if h.shape[-2:] != (Hp, Wp):
             raise ValueError(f"psf0 must be given on the object grid {(Hp, Wp)} (data + 2 pad)")
+        if h.ndim == 3 and h.shape[0] not in (1, nps):
+            raise ValueError(
+                f"psf0 holds {h.shape[0]} PSFs; the data need 1 or {nps} (one per frame with a shared "
+                "PSF, one per channel otherwise)"
+            )
         h = np.broadcast_to(h if h.ndim == 3 else h[None], (nps, Hp, Wp)).copy()
     elif pupil is not None:
         from scatterlab.imaging import psf as make_psf
@@ -521,17 +548,28 @@ def _setup(data, angles, psf0, pupil, opts: EMOptions):
     Hp, Wp = ops.shape
     yy, xx = np.mgrid[0:Hp, 0:Wp]
     support = np.hypot(yy - Hp // 2, xx - Wp // 2) <= radius
-    nps = 1 if opts.psf.shared else d.shape[0]
+    K, frames = d.shape[0], opts.psf.frames
+    nps = frames if opts.psf.shared else K
+    group = np.repeat(np.arange(frames), K // frames) if opts.psf.shared else np.arange(K)
     h = _initial_psfs(psf0, pupil, ops, support, radius, nps)
-    pupil_phase = np.zeros((nps,) + np.shape(pupil)) if opts.psf.mode == "pupil" else None
+    pupil_phase = (
+        np.zeros((nps,) + np.shape(pupil)) if opts.psf.mode in ("pupil", "phase") else None
+    )
+    phase_psf = None
+    if opts.psf.mode == "phase":
+        # the start phases reproduce the start PSFs (Gerchberg-Saxton), which are then exactly the model's
+        phase_psf = PupilPhasePSF(pupil, ops.shape, support)
+        _, pupil_phase = gerchberg_saxton(h, pupil, pupil_phase, ops.shape, 200)
+        h = np.stack([phase_psf.psf(ph) for ph in pupil_phase])
     s0, P0, alpha = _initial_object(d, th, valid, opts)
     s0, P, alpha = (_pad_edge(a, ops.pad) for a in (s0, P0, alpha))
-    # one PSF and a known AOP (Ch. VII's specular case): the channel objects are linear in the Stokes
-    # images, o_n = (S0 + S1 cos 2theta_n + S2 sin 2theta_n) / 2, so 2 (3 if sin 2alpha != 0) transforms
-    # replace K in every convolution, and the PSF update reuses their spectra
+    # one PSF per frame and a known AOP (Ch. VII's specular case): the channel objects are linear in the
+    # Stokes images, o_n = (S0 + S1 cos 2theta_n + S2 sin 2theta_n) / 2, so 2 (3 if sin 2alpha != 0)
+    # transforms per frame replace its channels in every convolution, and the PSF update reuses their spectra
     fast = opts.psf.shared and not opts.polarization.estimate_aop
-    model = (_StokesBasis if fast else _PerChannel)(ops, th, alpha)
-    problem = _Problem(d, th, valid, ops, support, d.sum(axis=(-2, -1)), model, opts, pupil, notes)
+    model = (_StokesBasis if fast else _PerChannel)(ops, th, alpha, group)
+    D = d.sum(axis=(-2, -1))
+    problem = _Problem(d, th, valid, ops, support, D, group, model, opts, pupil, notes, phase_psf)
     pred = model.forward(h, s0, P)
     state = EMState(h, s0, P, pred, ops.window_share(pred.Hf), pupil_phase)
     state.loglik.append(problem.likelihood(pred.i))
@@ -593,27 +631,33 @@ def m_step(problem: _Problem, state: EMState, T, Qp, Pp):
     return s0_new, P_new
 
 
-def psf_step(problem: _Problem, state: EMState, R):
-    """PSF update (Eq. 194): ``h <- h (r * o) / D``, per channel or summed for a shared PSF, confined to
-    the support; with ``mode="pupil"`` projected on the pupil model by Gerchberg-Saxton steps.
+def psf_step(problem: _Problem, state: EMState, R, s0_new=None, P_new=None):
+    """PSF update (Eq. 194): ``h <- h (r * o) / D``, per channel, or summed over the channels that share a
+    PSF (one frame); confined to the support; with ``mode="pupil"`` projected on the pupil model by
+    Gerchberg-Saxton steps.
 
     Parameters
     ----------
-    problem, state : as for :func:`e_step`; R : the ratio spectra from :func:`e_step`
+    problem, state : as for :func:`e_step`; R : the ratio spectra from :func:`e_step`; s0_new, P_new : the
+    object after the M-step (``mode="phase"`` fits the phases to it; None: the state's object)
 
     Returns
     -------
-    h_new : ``(K or 1, Hp, Wp)`` (``state.h`` itself when the PSF is fixed); pupil_phase : new pupil phases
+    h_new : ``(P, Hp, Wp)`` (``state.h`` itself when the PSF is fixed); pupil_phase : new pupil phases
     or None
     """
     popt, h, D, support = problem.opts.psf, state.h, problem.D, problem.support
     if popt.mode == "fixed":
         return h, None
+    if popt.mode == "phase":
+        s0 = state.s0 if s0_new is None else s0_new
+        return _phase_step(problem, state, s0, state.P if P_new is None else P_new)
     num = sfft.fftshift(problem.model.psf_correlation(state.pred, R), axes=(-2, -1))
-    if popt.shared:
-        h_em = (h[0] * num.sum(0) / D.sum())[None]
-    else:
-        h_em = h * num / D[:, None, None]
+    group = problem.group
+    if num.shape[0] != h.shape[0]:  # per-channel correlations of PSFs shared by several channels
+        num = np.stack([num[group == g].sum(0) for g in range(h.shape[0])])
+    Dg = np.bincount(group, weights=D, minlength=h.shape[0])
+    h_em = h * num / Dg[:, None, None]
     h_em = np.where(support, np.clip(h_em, 0, None), 0.0)
     h_em /= np.maximum(h_em.sum(axis=(-2, -1), keepdims=True), 1e-300)
     if popt.mode != "pupil":
@@ -626,17 +670,53 @@ def psf_step(problem: _Problem, state: EMState, R):
     return h_new, phase
 
 
+def _phase_step(problem: _Problem, state: EMState, s0, P):
+    """Each frame's pupil phase maximizing its Poisson log-likelihood with the object held at (s0, P):
+    ``gs_steps`` L-BFGS iterations from the current phase (the objective is scaled by the frame's counts)."""
+    from scipy.optimize import minimize
+
+    model, ops, pp = problem.model, problem.ops, problem.phase_psf
+    Bf = model.object_spectra(s0, P)
+    inside = pp.inside
+    hs, phases = [], []
+    for f in range(state.h.shape[0]):
+        chan = problem.group == f
+        d_f, scale = problem.d[chan], float(problem.D[chan].sum())
+
+        def objective(x, f=f, d_f=d_f, scale=scale):
+            ph = np.zeros(inside.shape)
+            ph[inside] = x
+            L, G = model.frame_loglik(f, ops.otf(pp.psf(ph)), Bf, d_f, problem.valid)
+            return -L / scale, -pp.gradient(ph, G)[inside] / scale
+
+        x0 = state.pupil_phase[f][inside]
+        res = minimize(
+            objective,
+            x0,
+            jac=True,
+            method="L-BFGS-B",
+            # the scaled objective's gradient is small (1e-6 per phase pixel): stop on the steps only
+            options={"maxiter": problem.opts.psf.gs_steps, "gtol": 0.0, "ftol": 0.0},
+        )
+        ph = np.zeros(inside.shape)
+        ph[inside] = res.x
+        phases.append(ph)
+        hs.append(pp.psf(ph))
+    return np.stack(hs), np.stack(phases)
+
+
 def _accept(problem: _Problem, state: EMState, s0_new, P_new, h_new, phase_new):
     """Move the state to the new estimate; Schulz: a pupil-projected PSF step is kept only if the
     log-likelihood increased. Records the log-likelihood and the objective."""
     model, h = problem.model, state.h
     pred = model.forward(h_new, s0_new, P_new, Hf=state.pred.Hf if h_new is h else None)
     L_new = problem.likelihood(pred.i)
-    if problem.opts.psf.mode == "pupil" and L_new < state.loglik[-1]:
+    parametric = problem.opts.psf.mode in ("pupil", "phase")
+    if parametric and L_new < state.loglik[-1]:
         h_new = h
         pred = model.forward(h, s0_new, P_new, Hf=state.pred.Hf)
         L_new = problem.likelihood(pred.i)
-    elif problem.opts.psf.mode == "pupil":
+    elif parametric:
         state.pupil_phase = phase_new
     if h_new is not h:
         state.w = problem.ops.window_share(pred.Hf)
@@ -679,7 +759,8 @@ def blind_deconvolve(
     data : array (K, H, W) [photo-electrons] -- negative values (read noise after dark subtraction) are
         clipped at 0 for the Poisson model; NaN is not allowed (use 0 and it contributes nothing).
     angles : array (K,) [rad] -- polarizer angles.
-    psf0 : array (Hp, Wp) or (K, Hp, Wp) on the object grid, optional -- initial or known PSF (centred).
+    psf0 : array (Hp, Wp) or (P, Hp, Wp) on the object grid, optional -- initial or known PSF(s) (centred),
+        P = ``frames`` with a shared PSF, K without.
     pupil : array (n, n), optional -- aperture for ``psf_mode="pupil"`` and the diffraction-limited start.
     options : EMOptions, optional
     **keywords : the flat option names above (unknown names raise TypeError).
@@ -696,7 +777,7 @@ def blind_deconvolve(
     for it in range(1, opts.stop.iterations + 1):
         T, Qp, Pp, R = e_step(problem, state)
         s0_new, P_new = m_step(problem, state, T, Qp, Pp)
-        h_new, phase_new = psf_step(problem, state, R)
+        h_new, phase_new = psf_step(problem, state, R, s0_new, P_new)
         _accept(problem, state, s0_new, P_new, h_new, phase_new)
         if opts.stop.callback is not None:
             opts.stop.callback(_result(problem, state, it, time.perf_counter() - t0))
@@ -734,50 +815,77 @@ class _State:
 
 
 class _StokesBasis:
-    """Shared PSF, known AOP: o_n = sum_j A_nj B_j with B = (S0, P S0 cos 2alpha, P S0 sin 2alpha) and
-    A_n = (1, cos 2theta_n, sin 2theta_n) / 2 (the third term dropped when sin 2alpha = 0 everywhere)."""
+    """One PSF per frame, known AOP: o_n = sum_j A_nj B_j with B = (S0, P S0 cos 2alpha, P S0 sin 2alpha)
+    and A_n = (1, cos 2theta_n, sin 2theta_n) / 2 (the third term dropped when sin 2alpha = 0 everywhere).
+    The object's spectra are shared by the frames; the back-projections of all frames are summed in the
+    Fourier domain, so a frame costs J transforms forward and J back."""
 
-    def __init__(self, ops, th, alpha):
+    def __init__(self, ops, th, alpha, group):
         self.ops, self.alpha = ops, alpha
+        self.frames = int(group.max()) + 1
         c2a, s2a = np.cos(2 * alpha), np.sin(2 * alpha)
         self.J = 3 if np.any(np.abs(s2a) > 1e-12) else 2
         self.trig = np.stack([c2a, s2a])[: self.J - 1]  # (J - 1, Hp, Wp)
-        self.A = (
-            0.5 * np.stack([np.ones_like(th), np.cos(2 * th), np.sin(2 * th)], axis=1)[:, : self.J]
-        )  # (K, J)
-        self.sum_trig = (2 * self.A[:, 1:]).sum(0)  # sum_n (cos 2theta_n, sin 2theta_n)
+        A = 0.5 * np.stack([np.ones_like(th), np.cos(2 * th), np.sin(2 * th)], axis=1)[:, : self.J]
+        self.A = A.reshape(self.frames, -1, self.J)  # (F, K / F, J)
+        # (F, J - 1): sum over each frame's channels of (cos 2theta_n, sin 2theta_n)
+        self.sum_trig = (2 * self.A[..., 1:]).sum(1)
 
     def forward(self, h, s0, P, Hf=None):
-        Hf = self.ops.otf(h[0]) if Hf is None else Hf
+        Hf = self.ops.otf(h) if Hf is None else Hf  # (F, Hp, Wr)
         B = np.concatenate([s0[None], (P * s0)[None] * self.trig])  # (J, Hp, Wp)
         Bf = self.ops.rfft(B)
-        blurred = self.ops.crop(self.ops.irfft(Bf * Hf))
-        return _State(np.tensordot(self.A, blurred, axes=1), Hf, Bf)
+        blurred = self.ops.crop(self.ops.irfft(Bf[None] * Hf[:, None]))  # (F, J, H, W)
+        i = np.einsum("fkj,fjyx->fkyx", self.A, blurred)
+        return _State(i.reshape((-1,) + i.shape[2:]), Hf, Bf)
 
     def estep(self, state, r, s0, P):
-        R = self.ops.rfft(
-            self.ops.extend(np.tensordot(2 * self.A.T, r, axes=1))
-        )  # spectra of combined ratios
-        C = self.ops.irfft(R * np.conj(state.Hf))  # their back-projections (J, Hp, Wp)
+        rf = r.reshape(self.A.shape[:2] + r.shape[1:])  # (F, K / F, H, W)
+        # spectra of each frame's combined ratios (F, J, ...), back-projected and summed over the frames
+        R = self.ops.rfft(self.ops.extend(np.einsum("fkj,fkyx->fjyx", 2 * self.A, rf)))
+        C = self.ops.irfft(np.sum(R * np.conj(state.Hf)[:, None], axis=0))  # (J, Hp, Wp)
         pol = C[0] + np.sum(self.trig * C[1:], axis=0)  # sum_n 2 cos^2(alpha - theta_n) c_n
         T = 0.5 * s0 * ((1 - P) * C[0] + P * pol)
         Qp = 0.5 * P * s0 * pol
         return T, Qp, None, R
 
+    def object_spectra(self, s0, P):
+        """Spectra of the Stokes images B = (S0, P S0 cos 2alpha[, P S0 sin 2alpha]), (J, Hp, Wr)."""
+        return self.ops.rfft(np.concatenate([s0[None], (P * s0)[None] * self.trig]))
+
+    def frame_loglik(self, f, Hf, Bf, d, valid):
+        """Poisson log-likelihood of frame ``f`` (its channels ``d``) through the OTF ``Hf`` of one PSF, and
+        its gradient with respect to that (centred) PSF: sum_n (d_n / i_n - 1) correlated with o_n."""
+        A = self.A[f]  # (K / F, J)
+        i = np.tensordot(A, self.ops.crop(self.ops.irfft(Bf * Hf)), axes=1)
+        i = np.maximum(i, 1e-300)
+        L = float(np.vdot(d, np.log(i))) - float(np.sum(i * valid))
+        r = np.where(valid, d / i - 1.0, 0.0)
+        R = self.ops.rfft(self.ops.extend(np.tensordot(A.T, r, axes=1)))  # (J, Hp, Wr)
+        G = sfft.fftshift(self.ops.irfft(np.sum(R * np.conj(Bf), axis=0)))
+        return L, G
+
     def s0_denominator(self, w, P):
-        K = self.A.shape[0]
-        return w * (0.5 * K + 0.5 * P * np.tensordot(self.sum_trig, self.trig, axes=1))
+        w = np.broadcast_to(w, (self.frames,) + P.shape)
+        K = self.A.shape[1]
+        per = 0.5 * K + 0.5 * P * np.einsum("fj,jyx->fyx", self.sum_trig, self.trig)
+        return np.sum(w * per, axis=0)
 
     def psf_correlation(self, state, R):
-        return self.ops.irfft(0.5 * np.sum(R * np.conj(state.spectra), axis=0))[None]
+        return self.ops.irfft(0.5 * np.sum(R * np.conj(state.spectra)[None], axis=1))  # (F, Hp, Wp)
 
 
 class _PerChannel:
-    """One PSF per channel, or an AOP to estimate: the K channel objects are convolved one by one."""
+    """One PSF per channel, or an AOP to estimate: the K channel objects are convolved one by one (channel n
+    through PSF ``group[n]``)."""
 
-    def __init__(self, ops, th, alpha):
-        self.ops, self.th = ops, th
+    def __init__(self, ops, th, alpha, group):
+        self.ops, self.th, self.group = ops, th, group
         self.set_aop(alpha)
+
+    def _per_channel(self, a):
+        """PSF-indexed ``a`` (P, ...) as channel-indexed (K, ...) (as it is when P is 1 or K)."""
+        return a if np.ndim(a) == 0 or a.shape[0] in (1, self.th.size) else a[self.group]
 
     def set_aop(self, alpha):
         self.alpha = alpha
@@ -787,17 +895,17 @@ class _PerChannel:
         Hf = self.ops.otf(h) if Hf is None else Hf
         o = 0.5 * (1 - P) * s0 + P * s0 * self.cos2  # (K, Hp, Wp)
         Of = self.ops.rfft(o)
-        return _State(self.ops.crop(self.ops.irfft(Of * Hf)), Hf, Of)
+        return _State(self.ops.crop(self.ops.irfft(Of * self._per_channel(Hf))), Hf, Of)
 
     def estep(self, state, r, s0, P):
         R = self.ops.rfft(self.ops.extend(r))
-        c = self.ops.irfft(R * np.conj(state.Hf))  # back-projection (K, Hp, Wp)
+        c = self.ops.irfft(R * np.conj(self._per_channel(state.Hf)))  # back-projection (K, Hp, Wp)
         Pp = P * s0 * self.cos2 * c  # sum_y psi_pn
         T = (0.5 * (1 - P) * s0 * c + Pp).sum(0)
         return T, Pp.sum(0), Pp, R
 
     def s0_denominator(self, w, P):
-        return np.sum(w * (0.5 * (1 - P) + P * self.cos2), axis=0)
+        return np.sum(self._per_channel(w) * (0.5 * (1 - P) + P * self.cos2), axis=0)
 
     def psf_correlation(self, state, R):
         return self.ops.irfft(R * np.conj(state.spectra))  # r_n correlated with o_n

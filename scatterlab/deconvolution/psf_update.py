@@ -107,3 +107,91 @@ def gerchberg_saxton(h_target, pupil, phase, shape, steps):
         out_h.append(resample_psf(np.abs(F) ** 2, shape))
         out_phase.append(ph)
     return np.stack(out_h), np.stack(out_phase)
+
+
+class PupilPhasePSF:
+    r"""The PSF of a pupil phase on the object grid, and its gradient with respect to that phase.
+
+    :math:`h(\phi) = m\,|\mathcal F\{A e^{j\phi}\}|^2 / \sum m\,|\mathcal F\{A e^{j\phi}\}|^2` (Eq. 186), the
+    transform on the 2n x 2n Nyquist grid of the n x n pupil, centred on the object grid, ``m`` the support.
+    :meth:`gradient` is the chain rule from :math:`\partial L/\partial h` to :math:`\partial L/\partial\phi`
+    (Schulz's multi-frame gradient): with :math:`E = \mathcal F\{p\}`, :math:`p = A e^{j\phi}`,
+    :math:`\partial L/\partial\phi(u) = -2\,\mathrm{Im}[p(u)\,\mathcal F\{g\,\bar E\}(u)]`, g the gradient
+    with respect to :math:`|E|^2`.
+
+    Parameters
+    ----------
+    pupil : ndarray, shape (n, n)
+        Aperture amplitude A.
+    shape : tuple of int
+        Object grid ``(Hp, Wp)`` [pixels].
+    support : ndarray of bool, shape (Hp, Wp)
+        Where the PSF may be non-zero.
+    """
+
+    def __init__(self, pupil, shape, support):
+        self.A = np.asarray(pupil, float)
+        self.n = self.A.shape[-1]
+        m = 2 * self.n
+        self.m = m
+        Hp, Wp = shape
+        ch, cw = min(Hp, m), min(Wp, m)
+        self.dst = (
+            slice((Hp - ch) // 2, (Hp - ch) // 2 + ch),
+            slice((Wp - cw) // 2, (Wp - cw) // 2 + cw),
+        )
+        self.src = (
+            slice((m - ch) // 2, (m - ch) // 2 + ch),
+            slice((m - cw) // 2, (m - cw) // 2 + cw),
+        )
+        self.shape = tuple(shape)
+        self.support = np.asarray(support, bool)
+        self.inside = self.A > 0
+
+    def _field(self, phase):
+        p = self.A * np.exp(1j * phase)
+        return p, np.fft.fft2(p, s=(self.m, self.m))
+
+    def psf(self, phase):
+        """The PSF ``(Hp, Wp)`` (centred, unit sum over the support) of the pupil phase ``(n, n)`` [rad].
+
+        Parameters
+        ----------
+        phase : ndarray, shape (n, n)
+
+        Returns
+        -------
+        ndarray, shape (Hp, Wp)
+        """
+        _, E = self._field(phase)
+        big = np.zeros(self.shape)
+        big[self.dst] = np.fft.fftshift(E.real**2 + E.imag**2)[self.src]
+        big *= self.support
+        return big / big.sum()
+
+    def gradient(self, phase, G):
+        """:math:`\\partial L/\\partial\\phi` ``(n, n)`` [1/rad] from :math:`\\partial L/\\partial h` ``G``.
+
+        Parameters
+        ----------
+        phase : ndarray, shape (n, n)
+            Pupil phase [rad].
+        G : ndarray, shape (Hp, Wp)
+            Gradient of the objective with respect to the (centred, normalised) PSF.
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            Zero outside the aperture.
+        """
+        p, E = self._field(phase)
+        big = np.zeros(self.shape)
+        big[self.dst] = np.fft.fftshift(E.real**2 + E.imag**2)[self.src]
+        big *= self.support
+        S = big.sum()
+        h = big / S
+        g_h = np.where(self.support, (G - np.sum(G * h)) / S, 0.0)
+        gc = np.zeros((self.m, self.m))
+        gc[self.src] = g_h[self.dst]
+        W = np.fft.fft2(np.fft.ifftshift(gc) * np.conj(E))[: self.n, : self.n]
+        return np.where(self.inside, -2.0 * np.imag(p * W), 0.0)
