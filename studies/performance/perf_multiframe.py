@@ -11,7 +11,13 @@ polarizer channels of a frame sharing its PSF). For F = 1, 2, 4 (quick: 1, 2) th
 
 Reported per row: the S0 relative RMSE and DOLP RMSE against the object, the mean L1 distance of the estimated
 PSFs from the true ones (2 = disjoint), and the run time, with its ratio to the single-frame ``"pupil"``
-restoration of the same run (the baseline).
+restoration of the same run (the baseline). The PSF support (a disc of radius n/4) cuts the true PSFs' far
+halo: the "fixed" rows' L1 distance (0.1-0.14) is that cut, the floor of every row.
+
+Full mode (96 x 96, D/r0 6, 100 iterations; measured 24 Nov 2026, serial, 2-core machine shared with other
+jobs): 408 s. Four frames with the Gerchberg-Saxton pupil model bring the S0 error from 0.47 to 0.17 at 10x
+the time, but the PSF estimates stay at L1 1.27 from the truth; the exact-likelihood phases do not do better
+(0.20 / 1.64 at 126x), and started at the true PSFs they leave them (L1 0.37 -> 1.56) for a higher likelihood.
 """
 
 import time
