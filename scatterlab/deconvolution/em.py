@@ -124,7 +124,9 @@ class PSFOptions:
         capture).
     frames : number of frames (Schulz's multi-frame data): the K channels are ``frames`` consecutive groups
         of K / frames channels, each group one exposure of the same object through its own turbulence.
-        With ``shared`` each frame has one PSF; the object is common to all frames.
+        With ``shared`` each frame has one PSF; the object is common to all frames. Without ``shared``
+        every channel has its own PSF anyway and ``frames`` only has to divide K. A frame without photons
+        (a lost exposure) keeps its start PSF: it carries no information on it.
     radius : PSF support radius [pixels]; None: a quarter of the smaller data side.
     gs_steps : Gerchberg-Saxton steps (``mode="pupil"``) or L-BFGS iterations (``mode="phase"``) per
         iteration.
@@ -408,7 +410,8 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
     if th.size != K:
         raise ValueError(f"angles has {th.size} entries for {K} channels")
     mode, radius, frames = opts.psf.mode, opts.psf.radius, opts.psf.frames
-    if not (isinstance(frames, (int, np.integer)) and frames >= 1 and K % frames == 0):
+    whole = isinstance(frames, (int, np.integer)) and not isinstance(frames, bool)
+    if not (whole and frames >= 1 and K % frames == 0):
         raise ValueError(
             f"frames must be a positive integer that divides the {K} channels, got {frames!r}"
         )
@@ -477,6 +480,8 @@ def _initial_psfs(psf0, pupil, ops: _Ops, support, radius, nps):
         h = np.asarray(psf0, float)
         if h.shape[-2:] != (Hp, Wp):
             raise ValueError(f"psf0 must be given on the object grid {(Hp, Wp)} (data + 2 pad)")
+        if h.ndim not in (2, 3):
+            raise ValueError(f"psf0 must have shape (Hp, Wp) or (P, Hp, Wp), got {h.shape}")
         if h.ndim == 3 and h.shape[0] not in (1, nps):
             raise ValueError(
                 f"psf0 holds {h.shape[0]} PSFs; the data need 1 or {nps} (one per frame with a shared "
@@ -569,6 +574,11 @@ def _setup(data, angles, psf0, pupil, opts: EMOptions):
     fast = opts.psf.shared and not opts.polarization.estimate_aop
     model = (_StokesBasis if fast else _PerChannel)(ops, th, alpha, group)
     D = d.sum(axis=(-2, -1))
+    empty = np.flatnonzero(np.bincount(group, weights=D, minlength=nps) <= 0)
+    if empty.size:
+        notes.append(
+            f"PSF(s) {empty.tolist()} saw no photons (lost exposures): they keep their start"
+        )
     problem = _Problem(d, th, valid, ops, support, D, group, model, opts, pupil, notes, phase_psf)
     pred = model.forward(h, s0, P)
     state = EMState(h, s0, P, pred, ops.window_share(pred.Hf), pupil_phase)
@@ -656,8 +666,9 @@ def psf_step(problem: _Problem, state: EMState, R, s0_new=None, P_new=None):
     group = problem.group
     if num.shape[0] != h.shape[0]:  # per-channel correlations of PSFs shared by several channels
         num = np.stack([num[group == g].sum(0) for g in range(h.shape[0])])
-    Dg = np.bincount(group, weights=D, minlength=h.shape[0])
-    h_em = h * num / Dg[:, None, None]
+    Dg = np.bincount(group, weights=D, minlength=h.shape[0])[:, None, None]
+    # a PSF that no photon reached (a lost exposure) keeps its value
+    h_em = np.where(Dg > 0, h * num / np.maximum(Dg, 1e-300), h)
     h_em = np.where(support, np.clip(h_em, 0, None), 0.0)
     h_em /= np.maximum(h_em.sum(axis=(-2, -1), keepdims=True), 1e-300)
     if popt.mode != "pupil":
@@ -682,6 +693,10 @@ def _phase_step(problem: _Problem, state: EMState, s0, P):
     for f in range(state.h.shape[0]):
         chan = problem.group == f
         d_f, scale = problem.d[chan], float(problem.D[chan].sum())
+        if scale <= 0:  # a lost exposure: no information on its PSF
+            phases.append(state.pupil_phase[f])
+            hs.append(state.h[f])
+            continue
 
         def objective(x, f=f, d_f=d_f, scale=scale):
             ph = np.zeros(inside.shape)

@@ -429,6 +429,10 @@ def test_frames_and_phase_mode_bad_input():
         blind_deconvolve(d, th, frames=3)
     with pytest.raises(ValueError, match="frames"):
         blind_deconvolve(d, th, frames=0)
+    with pytest.raises(ValueError, match="frames"):
+        blind_deconvolve(d, th, frames=True)
+    with pytest.raises(ValueError, match="psf0 must have shape"):
+        blind_deconvolve(d, th, frames=2, psf_mode="fixed", psf0=np.ones((1, 2, 24, 24)))
     with pytest.raises(ValueError, match="psf0 holds 3 PSFs"):
         blind_deconvolve(d, th, frames=2, psf_mode="fixed", psf0=np.ones((3, 24, 24)))
     with pytest.raises(ValueError, match="pupil"):
@@ -505,3 +509,78 @@ def test_phase_mode_fits_a_pupil_phase_to_a_known_object_and_never_lowers_the_li
     truth = resample_psf(h, grid)
     e_end, e_start = np.abs(res.psfs[0] - truth).sum(), np.abs(psf0 - truth).sum()
     assert e_end < 0.5 * e_start, (e_start, e_end)
+
+
+@pytest.mark.parametrize("boundary,masked,aop", [("periodic", False, 0.0), ("reeves", True, 0.3)])
+def test_phase_gradient_matches_finite_differences(boundary, masked, aop):
+    """The L-BFGS gradient of psf_mode="phase": dL/dh of one frame's Poisson log-likelihood
+    (``frame_loglik``, with Reeves padding and masked pixels) composed with dL/dphi of the pupil model
+    (``PupilPhasePSF.gradient``, with the unit-sum normalisation over the support) against central
+    differences of the log-likelihood itself; and that log-likelihood against the whole model's
+    prediction for that frame."""
+    from scatterlab.deconvolution.em import _Ops, _StokesBasis
+    from scatterlab.deconvolution.psf_update import PupilPhasePSF
+    from scatterlab.imaging import circular_pupil
+
+    rng = np.random.default_rng(0)
+    H, W = 24, 20
+    valid = np.ones((H, W), bool)
+    if masked:
+        valid[3:7, 5:9] = False
+    ops = _Ops((H, W), 5 if boundary == "reeves" else 0, boundary, valid if masked else None)
+    Hp, Wp = ops.shape
+    yy, xx = np.mgrid[0:Hp, 0:Wp]
+    support = np.hypot(yy - Hp // 2, xx - Wp // 2) <= 6
+    th = np.tile(ANGLES_0_45_90_135, 2)
+    model = _StokesBasis(ops, th, np.full((Hp, Wp), aop), np.repeat([0, 1], 4))
+    A = circular_pupil(12, 5)
+    pp = PupilPhasePSF(A, (Hp, Wp), support)
+    s0, P = rng.uniform(50, 200, (Hp, Wp)), rng.uniform(0, 1, (Hp, Wp))
+    Bf = model.object_spectra(s0, P)
+    h_true = pp.psf(rng.normal(0, 1, A.shape) * (A > 0))
+    d = rng.poisson(model.forward(np.stack([h_true, h_true]), s0, P).i).astype(float) * valid
+    ph = rng.normal(0, 1, A.shape) * (A > 0)
+
+    def loglik(phase):
+        return model.frame_loglik(1, ops.otf(pp.psf(phase)), Bf, d[4:], valid)
+
+    L0, G = loglik(ph)
+    grad = pp.gradient(ph, G)
+    inside = np.argwhere(A > 0)
+    for a, b in inside[rng.choice(len(inside), 8, replace=False)]:
+        step = np.zeros_like(ph)
+        step[a, b] = 1e-5
+        fd = (loglik(ph + step)[0] - loglik(ph - step)[0]) / 2e-5
+        assert fd == pytest.approx(grad[a, b], rel=1e-4, abs=1e-6 * np.abs(grad).max())
+    i = model.forward(np.stack([h_true, pp.psf(ph)]), s0, P).i[4:]
+    assert L0 == pytest.approx(float(np.vdot(d[4:], np.log(i)) - np.sum(i * valid)), rel=1e-12)
+
+
+@pytest.mark.parametrize("mode", ["em", "phase"])
+def test_a_lost_exposure_keeps_its_psf_and_leaves_the_other_frame_intact(mode):
+    """A frame with no photons (a lost exposure) carries no information on its PSF, which keeps its start;
+    the estimate stays finite. With periodic boundaries the ML object then explains the other frame's
+    photons spread over both exposures: the same DOLP as from that frame alone, and half its S0."""
+    from scatterlab.imaging import circular_pupil
+
+    S, lab, P = scene(32, rng=4)
+    rng = np.random.default_rng(2)
+    h = gaussian_psf((32, 32), 1.5)
+    good = detect(channel_images(S, ANGLES_0_45_90_135, h), rng, photons=2e4)
+    data = np.concatenate([good, np.zeros_like(good)])
+    A = circular_pupil(16, 8)
+    kw = dict(boundary="periodic", psf_radius=8, iterations=15, pupil=A, psf_mode=mode)
+    both = blind_deconvolve(data, np.tile(ANGLES_0_45_90_135, 2), frames=2, **kw)
+    alone = blind_deconvolve(good, ANGLES_0_45_90_135, **kw)
+    start = blind_deconvolve(
+        data, np.tile(ANGLES_0_45_90_135, 2), frames=2, **{**kw, "iterations": 0}
+    )
+    assert np.all(np.isfinite(both.loglik)) and np.all(np.isfinite(both.s0))
+    assert any("no photons" in note for note in both.notes)
+    np.testing.assert_array_equal(both.psfs[1], start.psfs[1])
+    # the halved object changes the likelihood of frame 0 by a constant only (same maximiser); the phase
+    # mode's L-BFGS line search still takes slightly different steps: 2.5e-8 of a PSF peaked near 0.05
+    peak = alone.psfs[0].max()
+    np.testing.assert_allclose(both.psfs[0], alone.psfs[0], rtol=0, atol=1e-5 * peak)
+    np.testing.assert_allclose(both.dolp, alone.dolp, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(both.s0, 0.5 * alone.s0, rtol=1e-6)
