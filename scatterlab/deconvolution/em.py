@@ -538,7 +538,9 @@ def _setup(data, angles, psf0, pupil, opts: EMOptions):
     """Validate, build the fixed problem and the start state."""
     notes = []
     d, th = _check_inputs(data, angles, psf0, pupil, opts)
-    if not evenly_spaced(th):
+    if not all(
+        evenly_spaced(a) for a in th.reshape(opts.psf.frames, -1)
+    ):  # each frame's polarizers
         notes.append(
             "polarizer angles are not evenly spaced: the S0/DOLP updates are generalised-EM steps "
             "(coupled updates of Sec. 3.3.2)"

@@ -468,6 +468,7 @@ def test_two_frames_with_complementary_blurs_restore_what_neither_frame_can():
 
     e_joint, e_single = err(joint.s0), min(err(r.s0) for r in singles)
     assert joint.psfs.shape == (2, n, n)
+    assert not any("evenly" in note for note in joint.notes)  # each frame's 0/45/90/135 deg is even
     assert e_joint < 0.5 * e_single, (e_joint, e_single)
 
 
