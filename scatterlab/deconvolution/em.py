@@ -538,9 +538,8 @@ def _setup(data, angles, psf0, pupil, opts: EMOptions):
     """Validate, build the fixed problem and the start state."""
     notes = []
     d, th = _check_inputs(data, angles, psf0, pupil, opts)
-    if not all(
-        evenly_spaced(a) for a in th.reshape(opts.psf.frames, -1)
-    ):  # each frame's polarizers
+    # judged per frame: frames of 0/45/90/135 deg tiled together are evenly spaced
+    if not all(evenly_spaced(a) for a in th.reshape(opts.psf.frames, -1)):
         notes.append(
             "polarizer angles are not evenly spaced: the S0/DOLP updates are generalised-EM steps "
             "(coupled updates of Sec. 3.3.2)"
@@ -850,8 +849,7 @@ class _StokesBasis:
 
     def forward(self, h, s0, P, Hf=None):
         Hf = self.ops.otf(h) if Hf is None else Hf  # (F, Hp, Wr)
-        B = np.concatenate([s0[None], (P * s0)[None] * self.trig])  # (J, Hp, Wp)
-        Bf = self.ops.rfft(B)
+        Bf = self.object_spectra(s0, P)
         blurred = self.ops.crop(self.ops.irfft(Bf[None] * Hf[:, None]))  # (F, J, H, W)
         i = np.einsum("fkj,fjyx->fkyx", self.A, blurred)
         return _State(i.reshape((-1,) + i.shape[2:]), Hf, Bf)

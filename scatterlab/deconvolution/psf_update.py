@@ -152,6 +152,12 @@ class PupilPhasePSF:
         p = self.A * np.exp(1j * phase)
         return p, np.fft.fft2(p, s=(self.m, self.m))
 
+    def _on_support(self, E):
+        """|E|^2, centred on the object grid and cut to the support (not normalised)."""
+        big = np.zeros(self.shape)
+        big[self.dst] = np.fft.fftshift(E.real**2 + E.imag**2)[self.src]
+        return big * self.support
+
     def psf(self, phase):
         """The PSF ``(Hp, Wp)`` (centred, unit sum over the support) of the pupil phase ``(n, n)`` [rad].
 
@@ -164,9 +170,7 @@ class PupilPhasePSF:
         ndarray, shape (Hp, Wp)
         """
         _, E = self._field(phase)
-        big = np.zeros(self.shape)
-        big[self.dst] = np.fft.fftshift(E.real**2 + E.imag**2)[self.src]
-        big *= self.support
+        big = self._on_support(E)
         return big / big.sum()
 
     def gradient(self, phase, G):
@@ -185,9 +189,7 @@ class PupilPhasePSF:
             Zero outside the aperture.
         """
         p, E = self._field(phase)
-        big = np.zeros(self.shape)
-        big[self.dst] = np.fft.fftshift(E.real**2 + E.imag**2)[self.src]
-        big *= self.support
+        big = self._on_support(E)
         S = big.sum()
         h = big / S
         g_h = np.where(self.support, (G - np.sum(G * h)) / S, 0.0)
