@@ -7,7 +7,7 @@
     scatterlab study run all [--quick] [--out DIR]
     scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
     scatterlab analyze DATASET [--out DIR] [--force] [--psf blind|diffraction] [--iterations N]
-                     [--classes adaptive|priors] [--bias-samples N] [--model-error]
+                     [--classes adaptive|priors] [--bias-samples N] [--model-error] [--frames F]
     scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--time-convention exp(-iwt)]
 
 Sweeps inside studies use ``--workers N`` local processes or a Dask cluster
@@ -160,6 +160,7 @@ def _analyze(args) -> int:
         classes=args.classes,
         bias_samples=args.bias_samples,
         model_error=args.model_error,
+        frames=args.frames,
     )
     return _report(
         args,
@@ -355,6 +356,13 @@ def main(argv=None) -> int:
         "--model-error",
         action="store_true",
         help="add the pBRDF's MoM-measured DOLP model error to the region errors (real data)",
+    )
+    an.add_argument(
+        "--frames",
+        type=int,
+        default=1,
+        help="exposures per geometry: the channels are F consecutive groups, each through its own "
+        "turbulence (default 1)",
     )
     an.add_argument(
         "--sigma", type=float, default=0.3, help="known roughness (rms facet slope, default 0.3)"

@@ -96,6 +96,12 @@ class AnalyzeSettings:
         pBRDF itself.
     seed : int
         Seeds the blind start PSFs, the re-simulation and the chains.
+    frames : int
+        Exposures per geometry (Schulz's multi-frame data): the dataset's K channels are ``frames``
+        consecutive groups of K / frames polarizer channels (e.g. 0/45/90/135 deg, then the same again),
+        each exposure through its own turbulence. The object is common; each frame gets its own blind PSF,
+        and the self-calibration re-simulates each frame through its own estimated PSF. With the known
+        diffraction PSF every frame has that PSF.
     """
 
     psf: str = "blind"
@@ -108,6 +114,7 @@ class AnalyzeSettings:
     posterior_steps: int = 1500
     model_error: bool = False
     seed: int = 20101210
+    frames: int = 1
 
     def validate(self) -> "AnalyzeSettings":
         """Check every option.
@@ -138,6 +145,9 @@ class AnalyzeSettings:
             raise ValueError(f"sigma must be in [0.001, 1.5], got {self.sigma}")
         if not isinstance(self.model_error, bool):
             raise ValueError(f"model_error must be True or False, got {self.model_error!r}")
+        whole = isinstance(self.frames, (int, np.integer)) and not isinstance(self.frames, bool)
+        if not (whole and 1 <= self.frames <= 1000):
+            raise ValueError(f"frames must be an integer in [1, 1000], got {self.frames!r}")
         if not 100 <= self.posterior_steps <= 10**6:
             raise ValueError(
                 f"posterior_steps must be in [100, 1000000], got {self.posterior_steps}"
@@ -240,6 +250,12 @@ def analyze(
     ds = dataset if hasattr(dataset, "counts") else read_dataset(dataset)
     if len(ds.theta) < 2:
         raise ValueError(f"the dataset has {len(ds.theta)} geometry; n and kappa need at least two")
+    K = ds.counts.shape[1]
+    if K % settings.frames or K // settings.frames < 3:
+        raise ValueError(
+            f"frames = {settings.frames} must divide the dataset's {K} channels into frames of at least "
+            "3 polarizer channels"
+        )
     folder = RunFolder(out, overwrite)
     t0 = time.perf_counter()
     rng = np.random.default_rng(settings.seed)
@@ -266,7 +282,12 @@ def _restore_and_register(acqs, thetas, settings, folder, rng, executor):
     priors = PRIOR_SETS[settings.priors] if settings.classes == "priors" else None
     log_stage(f"restore {len(acqs)} geometries ({settings.psf} PSF)")
     rs = RestoreSettings(
-        settings.iterations, settings.psf_model, priors, True, str(folder.checkpoints)
+        settings.iterations,
+        settings.psf_model,
+        priors,
+        True,
+        str(folder.checkpoints),
+        settings.frames,
     )
     ex = executor if executor is not None else get_executor("serial")
     tasks = [(a, rs, int(rng.integers(2**63)), Ideal()) for a in acqs]
@@ -299,7 +320,6 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
     """Region data from the layout, their self-calibration and posteriors, and the per-pixel maps:
     (estimates, maps, regions left out)."""
     from scatterlab.characterization.self_calibration import bias_corrected, restoration_bias
-    from scatterlab.deconvolution import resample_psf
 
     thetas = np.asarray(ds.theta, float)
     shape = layout.shape
@@ -318,7 +338,7 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
             "no region of either material is large enough for an estimate: " + "; ".join(missing)
         )
     blind = settings.psf == "blind"
-    psfs = [resample_psf(r.psf, shape) if blind else a.psf_true for r, a in zip(rests, acqs)]
+    psfs = [_on_image_grid(r.psf, shape) if blind else a.psf_true for r, a in zip(rests, acqs)]
     cfg = _config(ds, settings)
     # a known-PSF re-simulation measures its own noise and edge terms (one call); a blind one is repeated
     samples = settings.bias_samples if blind else 1
@@ -342,6 +362,15 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
         model_error=settings.model_error,
     )
     return estimates, pixel_maps(stack, thetas, settings.sigma), missing
+
+
+def _on_image_grid(psf, shape):
+    """An estimated PSF ``(Hp, Wp)``, or one per frame ``(F, Hp, Wp)``, resampled onto the image grid."""
+    from scatterlab.deconvolution import resample_psf
+
+    if np.ndim(psf) == 2:
+        return resample_psf(psf, shape)
+    return np.stack([resample_psf(h, shape) for h in psf])
 
 
 def _bias_corrected(region, draws):
@@ -484,7 +513,9 @@ def _markdown(ds, settings, posts, seconds, missing) -> str:
         "",
         f"{ds.counts.shape[0]} specular geometries {np.round(np.degrees(ds.theta), 2).tolist()} deg, "
         f"{ds.counts.shape[1]} channels, {ds.counts.shape[2]} x {ds.counts.shape[3]} pixels, "
-        f"{ds.wavelength * 1e6:g} um. Restoration: {settings.psf} PSF, {settings.iterations} EM iterations; "
+        f"{ds.wavelength * 1e6:g} um. Restoration: {settings.psf} PSF, {settings.iterations} EM iterations"
+        + (f", {settings.frames} frames per geometry (one PSF each)" if settings.frames > 1 else "")
+        + "; "
         f"priors {settings.priors}; sigma {settings.sigma} (known). Run time {seconds:.0f} s."
         + (
             " **Simulated data: the truth is shown beside every estimate.**" if ds.simulated else ""

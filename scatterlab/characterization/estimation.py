@@ -304,13 +304,20 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
             + ", ".join(f"{contraction[p]:.2f}" for p in weak)
             + "; 1 = fixed by the data, 0 = the prior's spread): the marginal interval follows the "
             "prior along a ridge of equal DOLP, and for a fixed material it does not cover at its "
-            "nominal rate. The joint (n, kappa) likelihood-ratio region does"
+            "nominal rate. The joint (n, kappa) likelihood-ratio region is the calibrated statement"
             + (
                 ""
                 if joint is None
                 else f" (truth inside at 68 % / 95 %: {'yes' if joint['covers68'] else 'no'} / "
                 f"{'yes' if joint['covers95'] else 'no'})"
             )
+        )
+    if joint is not None and not joint["covers95"]:
+        notes.append(
+            f"**the truth lies outside even the joint 95 % region** (Delta chi^2 "
+            f"{joint['delta_chi2']:.1f}, threshold {joint['threshold95']:.1f}): this region's DOLP is off "
+            "by more than the error it carries -- a restoration or classification error that the "
+            "self-calibration did not measure; do not trust this interval"
         )
     diag = s.get("diagnostics", {})
     converged = bool(diag.get("converged", True))

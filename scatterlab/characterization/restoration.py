@@ -57,8 +57,9 @@ class Restoration:
         Maximum-likelihood DOLP (NaN where there is no light).
     classes : ndarray of int, shape (H, W), or None
         Index into the priors (None when no classification was asked for).
-    psf : ndarray, shape (Hp, Wp), or None
-        The PSF used or estimated (object grid of the EM).
+    psf : ndarray, shape (Hp, Wp) or (F, Hp, Wp), or None
+        The PSF used or estimated (object grid of the EM); one per frame for multi-frame data
+        (``RestoreSettings.frames`` = F > 1).
     loglik : ndarray or None
         Poisson log-likelihood per EM iteration of the maximum-likelihood phase (never decreasing).
     loglik_classes : ndarray or None
@@ -90,6 +91,10 @@ class RestoreSettings:
         Deconvolve the no-turbulence image with its known PSF (default) or use its Stokes images as they are.
     checkpoint : str or None
         Folder where each deconvolution is saved, keyed by a digest of its inputs.
+    frames : int
+        Exposures in the channel stack (Schulz's multi-frame data): the K channels are ``frames``
+        consecutive groups of K / frames polarizer channels, each through its own turbulence; the object is
+        common and each frame gets its own PSF (:func:`scatterlab.deconvolution.blind_deconvolve`).
     """
 
     iterations: int = 150
@@ -97,6 +102,7 @@ class RestoreSettings:
     priors: tuple | None = None
     restore_reference: bool = True
     checkpoint: str | None = None
+    frames: int = 1
 
 
 def signed_dolp(S) -> np.ndarray:
@@ -153,6 +159,7 @@ def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int
                 settings.psf_model,
                 pri,
                 settings.restore_reference,
+                settings.frames,
                 ideal.psf,
                 seed,
                 acq.d_over_r0,
@@ -173,11 +180,16 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     # metal 25x brighter); a blind estimate is confined to a disc of a quarter of the field
     radius, pad = (np.sqrt(2) * H / 2, H // 2) if known_psf else (H / 4, int(np.ceil(H / 4)))
     grid = object_grid((H, W), radius, pad=pad)
-    kw = dict(psf_radius=radius, pad=pad, pupil=acq.pupil)
-    if known_psf:
+    F = settings.frames
+    kw = dict(psf_radius=radius, pad=pad, pupil=acq.pupil, frames=F)
+    if known_psf:  # one known PSF, the same for every frame
         psf0, mode = resample_psf(acq.psf_true, grid), "fixed"
-    else:
+    elif F == 1:
         psf0, mode = initial_psf(acq.pupil, grid, rng=seed), settings.psf_model
+    else:  # each frame starts from its own random screen
+        seeds = np.random.SeedSequence(seed).spawn(F)
+        psf0 = np.stack([initial_psf(acq.pupil, grid, rng=np.random.default_rng(s)) for s in seeds])
+        mode = settings.psf_model
     # with a known PSF the EM is Richardson-Lucy on the Stokes images: cheap per iteration, slow to pull the
     # metal's halo back out of the paint, so it gets at least KNOWN_PSF_ITERATIONS
     its = max(settings.iterations, KNOWN_PSF_ITERATIONS) if known_psf else settings.iterations
@@ -188,7 +200,7 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
         cont = blind_deconvolve(
             acq.counts,
             acq.angles,
-            psf0=ml.psfs[0],
+            psf0=ml.psfs,
             psf_mode="fixed",
             iterations=steps,
             priors=settings.priors,
@@ -198,7 +210,8 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
         )
         classes, loglik_classes = cont.classes, cont.loglik
     dolp = np.where(ml.s0 > 0, ml.dolp, np.nan)
-    return ml.s0, dolp, classes, ml.psfs[0], ml.loglik, loglik_classes
+    psf = ml.psfs[0] if F == 1 else ml.psfs
+    return ml.s0, dolp, classes, psf, ml.loglik, loglik_classes
 
 
 def restore(

@@ -183,24 +183,45 @@ def _resimulate_task(task):
     bootstrap = blind and d_over_r0 is not None
     # known PSF: through the same PSF, with noise; bootstrap: a new screen of the same D/r0, with noise;
     # blind without a D/r0: noise-free through the data's estimated PSF (sees only the blur it caught)
-    acq = acquire(
+    args = (
         plate,
         labels,
         theta,
         "resimulation",
         d_over_r0 if bootstrap else (float("nan") if blind else None),
-        cfg,
-        rng,
-        Ideal(noise=blind and not bootstrap),
-        psf=None if bootstrap else psf,
     )
-    settings = RestoreSettings(cfg.iterations, cfg.psf_model, None, True, None)
+    frames = 1 if psf is None or np.ndim(psf) == 2 else len(psf)
+    if frames == 1:
+        acq = acquire(
+            *args, cfg, rng, Ideal(noise=blind and not bootstrap), psf=None if bootstrap else psf
+        )
+    else:
+        acq = _multi_frame_acquisition(args, cfg, psf)
+    settings = RestoreSettings(cfg.iterations, cfg.psf_model, None, True, None, frames)
     rest = restore(acq, settings, seed, Ideal(psf=not blind))
     # a blind restoration through a new screen is shifted by its tilt: aligned with the synthetic object, as
     # the data are aligned with the restored no-turbulence image
     reference = acq.truth_s0 if bootstrap else None
     reg = register_restoration(rest, theta, reference, foreshortened=acq.foreshortened)
     return reg.dolp, acq.truth_dolp
+
+
+def _multi_frame_acquisition(args, cfg, psfs):
+    """Noise-free multi-frame data: each frame (``cfg.polarizer_deg`` split into ``len(psfs)`` equal
+    groups) imaged through its own estimated PSF ``psfs`` (F, H, W), the channels stacked frame by frame.
+
+    Every frame is scaled to the same total count, the mean of the frames': exposures of equal length
+    collect the same light from the object (unit-sum PSFs), up to what each PSF carries across the window's
+    edge (a few per cent at most), while :func:`acquire` scales each frame to its own brightest pixel.
+    """
+    F = len(psfs)
+    per = len(cfg.polarizer_deg) // F
+    frame_cfg = replace(cfg, polarizer_deg=list(cfg.polarizer_deg)[:per])
+    acqs = [acquire(*args, frame_cfg, None, Ideal(noise=True), psf=h) for h in psfs]
+    sums = np.array([a.counts.sum() for a in acqs])
+    counts = np.concatenate([a.counts * (sums.mean() / s) for a, s in zip(acqs, sums)])
+    angles = np.concatenate([a.angles for a in acqs])
+    return replace(acqs[0], counts=counts, angles=angles)
 
 
 def restoration_bias(
@@ -229,9 +250,10 @@ def restoration_bias(
         Estimated layout in object coordinates (0 dielectric, > 0 metal).
     thetas : ndarray, shape (M,)
         Specular angles [rad].
-    psfs : list of ndarray (H, W) or None
-        Per geometry, the PSF the image was restored with (None: the diffraction-limited one); used by the
-        known-PSF re-simulation.
+    psfs : list of ndarray (H, W) or (F, H, W), or None
+        Per geometry, the PSF the image was restored with (None: the diffraction-limited one), one per
+        frame for multi-frame data; used by the known-PSF re-simulation and the re-simulation through
+        the estimated PSFs.
     cfg : SceneConfig
     rng : numpy.random.Generator
     interior : bool ndarray (H, W)
@@ -266,6 +288,11 @@ def restoration_bias(
     if d_over_r0 is not None and not (np.isfinite(d_over_r0) and d_over_r0 > 0):
         raise ValueError(f"d_over_r0 must be > 0 (or None), got {d_over_r0!r}")
     bootstrap = blind and d_over_r0 is not None
+    if bootstrap and any(p is not None and np.ndim(p) == 3 for p in psfs):
+        raise ValueError(
+            "psfs: multi-frame data (one PSF per frame) can be re-simulated through their estimated "
+            "PSFs (d_over_r0=None), not through new screens"
+        )
     if bootstrap:
         R = int(BOOTSTRAP_REPLICATES if replicates is None else replicates)
     else:

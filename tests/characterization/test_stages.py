@@ -454,6 +454,28 @@ def test_a_metal_the_data_do_not_separate_is_flagged_and_its_truth_is_in_the_joi
     assert not any("only weakly" in w for w in paint.warnings)
 
 
+def test_a_region_whose_truth_is_outside_the_joint_95_region_is_told_not_to_be_trusted():
+    """A paint whose DOLP is diluted to 0.6 of its value at every geometry (a restoration bias no error term
+    carries, as the metal's halo leaves it): the
+    truth (the material the exact DOLP came from) falls outside the joint 95 % region, and the region's
+    note says so; the same paint with its exact DOLP gets no such note."""
+    from scatterlab.characterization.estimation import RegionData, region_posteriors
+    from scatterlab.inversion import model_dolp
+
+    th = np.radians([30.0, 40.0, 50.0, 60.0])
+    exact = np.asarray(model_dolp(1.5, 0.1, 0.3, th, th), float)
+    e = np.full(4, 2e-3)
+    regions = [
+        RegionData("paint", mean, e, e, np.zeros(4), 100, (1.5, 0.1))
+        for mean in (0.6 * exact, exact)
+    ]
+    biased, right = region_posteriors(regions, th, 0.3, np.random.default_rng(3), n_steps=400)
+    assert not biased.joint["covers95"], biased.joint
+    assert any("outside even the joint 95 % region" in w for w in biased.warnings)
+    assert right.joint["covers95"]
+    assert not any("outside even the joint" in w for w in right.warnings)
+
+
 def test_blind_bootstrap_on_the_reference_plate_undoes_the_paints_dilution():
     """Independent truth: the object's paint region-mean DOLP. Through D/r0 = 12.9 the blind restoration
     leaves the paint's DOLP diluted by the metal's unpolarized halo (about 0.6 of the truth). The bootstrap
