@@ -4,7 +4,9 @@
 * :mod:`psf_update` -- the Sec. 5.3.2 start PSF and the Gerchberg-Saxton pupil projection (Eqs. 146-150);
 * :mod:`priors` -- super-Gaussian DOLP priors (Eq. 195), the MAP DOLP update (Eq. 196), adaptive priors;
 * classification: several priors given to :func:`blind_deconvolve` label each pixel by the prior whose
-  update maximizes the objective; :func:`classification_errors` scores a label map like Table 4.
+  update maximizes the objective; :func:`classification_errors` scores a label map like Table 4;
+* :func:`layout_psf` -- one frame's PSF found with a few-material object (each material uniform, a soft
+  layout): the prior a single frame's likelihood needs to tell the PSF.
 """
 
 from scatterlab.deconvolution.classify import classification_errors, classify_dolp
@@ -24,6 +26,7 @@ from scatterlab.deconvolution.em import (
     object_grid,
     psf_step,
 )
+from scatterlab.deconvolution.layout import LayoutResult, layout_psf
 from scatterlab.deconvolution.priors import (
     PRIOR_SETS,
     SuperGaussianPrior,
@@ -57,6 +60,8 @@ __all__ = [
     "classification_errors",
     "classify_dolp",
     "initial_psf",
+    "layout_psf",
+    "LayoutResult",
     "object_grid",
     "gerchberg_saxton",
     "resample_psf",
