@@ -187,7 +187,12 @@ def observe(
     from scatterlab.runtime import get_executor
 
     settings = RestoreSettings(
-        cfg.iterations, cfg.psf_model, priors, True, None if checkpoint is None else str(checkpoint)
+        cfg.iterations,
+        cfg.psf_model,
+        priors,
+        True,
+        None if checkpoint is None else str(checkpoint),
+        psf_refine=cfg.psf_refine,
     )
     obs, tasks = [], []
     for th in np.asarray(thetas, float):

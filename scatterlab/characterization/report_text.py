@@ -13,7 +13,9 @@ def _header(cfg, seconds, ideal) -> list:
         f"{cfg.wavelength_um:g} um, specular geometries {cfg.geometry_deg} deg, D/r0 {cfg.d_over_r0}, "
         f"{cfg.photons:g} photo-electrons at the brightest channel pixel, {cfg.read_noise:g} e- read noise, "
         f"{cfg.image_size}^2 pixels (2 per lambda/D), polarizers {cfg.polarizer_deg} deg, "
-        f"{cfg.iterations} EM iterations ({cfg.psf_model} PSFs), priors {cfg.priors}, sigma "
+        f"{cfg.iterations} EM iterations ({cfg.psf_model} PSFs"
+        + (", refined with a few-material object" if cfg.psf_refine == "layout" else "")
+        + f"), priors {cfg.priors}, sigma "
         f"{cfg.sigma_known} (known), seed {cfg.seed}. Run time {seconds:.0f} s.{ideal_note}",
         "",
         "The no-turbulence image is deconvolved with its known diffraction-limited PSF (`no turbulence`) "

@@ -41,6 +41,11 @@ __all__ = [
 ]
 
 KNOWN_PSF_ITERATIONS = 100
+# psf_refine="layout": rounds of layout_psf (the PSF error stops falling by 20 on the default scene: 0.88 at
+# 20 and 40 rounds) and the known-PSF iterations that follow (Richardson-Lucy needs about 600 to pull the
+# metal's halo out of the paint: 0.071 -> 0.042 classification error from 150 to 600 with the true PSF)
+LAYOUT_ROUNDS = 20
+LAYOUT_FINAL_ITERATIONS = 600
 
 
 @dataclass
@@ -95,6 +100,11 @@ class RestoreSettings:
         Exposures in the channel stack (Schulz's multi-frame data): the K channels are ``frames``
         consecutive groups of K / frames polarizer channels, each through its own turbulence; the object is
         common and each frame gets its own PSF (:func:`scatterlab.deconvolution.blind_deconvolve`).
+    psf_refine : str
+        ``"layout"``: the blind PSF is refined with a few-material object
+        (:func:`scatterlab.deconvolution.layout_psf`, :data:`LAYOUT_ROUNDS` rounds) and the image then
+        restored with it held fixed for :data:`LAYOUT_FINAL_ITERATIONS` iterations (single frame only);
+        ``"none"``: the blind EM's own estimate.
     """
 
     iterations: int = 150
@@ -103,6 +113,7 @@ class RestoreSettings:
     restore_reference: bool = True
     checkpoint: str | None = None
     frames: int = 1
+    psf_refine: str = "none"
 
 
 def signed_dolp(S) -> np.ndarray:
@@ -160,6 +171,7 @@ def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int
                 pri,
                 settings.restore_reference,
                 settings.frames,
+                settings.psf_refine,
                 ideal.psf,
                 seed,
                 acq.d_over_r0,
@@ -194,6 +206,29 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     # metal's halo back out of the paint, so it gets at least KNOWN_PSF_ITERATIONS
     its = max(settings.iterations, KNOWN_PSF_ITERATIONS) if known_psf else settings.iterations
     ml = blind_deconvolve(acq.counts, acq.angles, psf0=psf0, psf_mode=mode, iterations=its, **kw)
+    if not known_psf and settings.psf_refine == "layout":
+        from scatterlab.deconvolution import layout_psf
+
+        if F != 1:
+            raise ValueError("psf_refine='layout' needs single-frame data (frames = 1)")
+        h = layout_psf(
+            acq.counts,
+            acq.angles,
+            ml,
+            pupil=acq.pupil,
+            psf_radius=radius,
+            pad=pad,
+            rounds=LAYOUT_ROUNDS,
+            rng=seed,
+        ).psf
+        ml = blind_deconvolve(
+            acq.counts,
+            acq.angles,
+            psf0=h,
+            psf_mode="fixed",
+            iterations=LAYOUT_FINAL_ITERATIONS,
+            **kw,
+        )
     classes, loglik_classes = None, np.zeros(0)
     if settings.priors:
         steps = max(10, settings.iterations // 5)

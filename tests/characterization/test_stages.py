@@ -147,6 +147,7 @@ def test_a_run_killed_at_any_stage_finishes_on_a_plain_rerun(
         ("[[plates]]\nmetal_n = -1.0\n", "metal_n"),
         ("[[plates]]\nmetal_roughness = 0.0\n", "metal_roughness"),
         ('[[plates]]\nmetal_kappa = "x"\n', "metal_kappa"),
+        ('psf_refine = "kmeans"\n', "psf_refine"),
     ],
 )
 def test_scene_errors_name_the_key_before_anything_runs(tmp_path, text, key):
@@ -452,6 +453,41 @@ def test_a_metal_the_data_do_not_separate_is_flagged_and_its_truth_is_in_the_joi
     assert metal.joint["covers68"] and metal.joint["delta_chi2"] < 0.5, metal.joint
     assert paint.parameters["kappa"]["contraction"] > 0.99
     assert not any("only weakly" in w for w in paint.warnings)
+
+
+def test_layout_refinement_restores_with_the_psf_it_found(monkeypatch):
+    """psf_refine="layout": the blind estimate goes to layout_psf, and the image is then restored with the PSF
+    it returns held fixed (the library function itself is tested against simulated truth in
+    tests/deconvolution/test_layout_psf.py)."""
+    import scatterlab.deconvolution as deconvolution
+    from scatterlab.characterization import acquire
+    from scatterlab.characterization.restoration import (
+        LAYOUT_FINAL_ITERATIONS,
+        RestoreSettings,
+        restore,
+    )
+    from scatterlab.deconvolution import LayoutResult, resample_psf
+
+    cfg = small(image_size=32)
+    rng = np.random.default_rng(2)
+    from scatterlab.characterization.scene_config import plate_labels
+
+    acq = acquire(Plate(), plate_labels(cfg, rng), np.radians(50.0), "D_r0_7.9", 7.9, cfg, rng)
+    seen = {}
+
+    def fake_layout_psf(data, angles, start, **kw):
+        seen["start"] = start
+        truth = resample_psf(acq.psf_true, start.psfs.shape[1:])
+        return LayoutResult(truth, None, None, None, None, None)
+
+    monkeypatch.setattr(deconvolution, "layout_psf", fake_layout_psf)
+    rest = restore(acq, RestoreSettings(iterations=5, psf_refine="layout"), seed=1)
+    assert seen["start"].iterations == 5  # the blind EM's estimate started it
+    support = rest.psf > 0
+    truth = resample_psf(acq.psf_true, rest.psf.shape) * support
+    np.testing.assert_allclose(rest.psf, truth / truth.sum(), rtol=1e-9, atol=1e-15)
+    assert rest.loglik.size == LAYOUT_FINAL_ITERATIONS + 1
+    assert np.all(np.diff(rest.loglik) >= -1e-10 * abs(rest.loglik[-1]))  # Richardson-Lucy
 
 
 def test_a_region_whose_truth_is_outside_the_joint_95_region_is_told_not_to_be_trusted():
