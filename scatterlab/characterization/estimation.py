@@ -312,12 +312,13 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
                 f"{'yes' if joint['covers95'] else 'no'})"
             )
         )
-    if joint is not None and not joint["covers95"]:
+    if joint is not None and np.isfinite(joint["delta_chi2"]) and not joint["covers95"]:
         notes.append(
             f"**the truth lies outside even the joint 95 % region** (Delta chi^2 "
-            f"{joint['delta_chi2']:.1f}, threshold {joint['threshold95']:.1f}): this region's DOLP is off "
-            "by more than the error it carries -- a restoration or classification error that the "
-            "self-calibration did not measure; do not trust this interval"
+            f"{joint['delta_chi2']:.1f}, threshold {joint['threshold95']:.1f}). A correct region misses "
+            "it 1 time in 20; a miss far beyond the threshold says this region's DOLP is off by more "
+            "than the error it carries (a restoration or classification error the self-calibration did "
+            "not measure)"
         )
     diag = s.get("diagnostics", {})
     converged = bool(diag.get("converged", True))

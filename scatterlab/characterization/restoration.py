@@ -171,7 +171,10 @@ def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int
                 pri,
                 settings.restore_reference,
                 settings.frames,
-                settings.psf_refine,
+                # the refinement's constants too: changing them must not serve stale checkpoints
+                (settings.psf_refine, LAYOUT_ROUNDS, LAYOUT_FINAL_ITERATIONS)
+                if settings.psf_refine == "layout"
+                else settings.psf_refine,
                 ideal.psf,
                 seed,
                 acq.d_over_r0,
@@ -193,6 +196,8 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     radius, pad = (np.sqrt(2) * H / 2, H // 2) if known_psf else (H / 4, int(np.ceil(H / 4)))
     grid = object_grid((H, W), radius, pad=pad)
     F = settings.frames
+    if settings.psf_refine == "layout" and F != 1:
+        raise ValueError("psf_refine='layout' needs single-frame data (frames = 1)")
     kw = dict(psf_radius=radius, pad=pad, pupil=acq.pupil, frames=F)
     if known_psf:  # one known PSF, the same for every frame
         psf0, mode = resample_psf(acq.psf_true, grid), "fixed"
@@ -209,8 +214,6 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     if not known_psf and settings.psf_refine == "layout":
         from scatterlab.deconvolution import layout_psf
 
-        if F != 1:
-            raise ValueError("psf_refine='layout' needs single-frame data (frames = 1)")
         h = layout_psf(
             acq.counts,
             acq.angles,

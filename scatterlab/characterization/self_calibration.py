@@ -209,8 +209,9 @@ def _resimulate_task(task):
 
 
 def _multi_frame_acquisition(args, cfg, psfs):
-    """Noise-free multi-frame data: each frame (``cfg.polarizer_deg`` split into ``len(psfs)`` equal
-    groups) imaged through its own estimated PSF ``psfs`` (F, H, W), the channels stacked frame by frame.
+    """Noise-free multi-frame data: each frame (``cfg.polarizer_deg`` split into ``len(psfs)`` consecutive
+    equal groups, each frame its own angles) imaged through its own estimated PSF ``psfs`` (F, H, W), the
+    channels stacked frame by frame.
 
     Every frame is scaled to the same total count, the mean of the frames': exposures of equal length
     collect the same light from the object (unit-sum PSFs), up to what each PSF carries across the window's
@@ -218,8 +219,17 @@ def _multi_frame_acquisition(args, cfg, psfs):
     """
     F = len(psfs)
     per = len(cfg.polarizer_deg) // F
-    frame_cfg = replace(cfg, polarizer_deg=list(cfg.polarizer_deg)[:per])
-    acqs = [acquire(*args, frame_cfg, None, Ideal(noise=True), psf=h) for h in psfs]
+    angles = list(cfg.polarizer_deg)
+    acqs = [
+        acquire(
+            *args,
+            replace(cfg, polarizer_deg=angles[f * per : (f + 1) * per]),
+            None,
+            Ideal(noise=True),
+            psf=h,
+        )
+        for f, h in enumerate(psfs)
+    ]
     sums = np.array([a.counts.sum() for a in acqs])
     counts = np.concatenate([a.counts * (sums.mean() / s) for a, s in zip(acqs, sums)])
     angles = np.concatenate([a.angles for a in acqs])
@@ -253,9 +263,9 @@ def restoration_bias(
     thetas : ndarray, shape (M,)
         Specular angles [rad].
     psfs : list of ndarray (H, W) or (F, H, W), or None
-        Per geometry, the PSF the image was restored with (None: the diffraction-limited one), one per
-        frame for multi-frame data; used by the known-PSF re-simulation and the re-simulation through
-        the estimated PSFs.
+        Per geometry, the PSF the image was restored with (None: the diffraction-limited one); used by the
+        known-PSF re-simulation and the re-simulation through the estimated PSFs. One per frame (F, H, W)
+        only for the latter (multi-frame data restored blindly, ``d_over_r0=None``).
     cfg : SceneConfig
     rng : numpy.random.Generator
     interior : bool ndarray (H, W)
@@ -290,10 +300,10 @@ def restoration_bias(
     if d_over_r0 is not None and not (np.isfinite(d_over_r0) and d_over_r0 > 0):
         raise ValueError(f"d_over_r0 must be > 0 (or None), got {d_over_r0!r}")
     bootstrap = blind and d_over_r0 is not None
-    if bootstrap and any(p is not None and np.ndim(p) == 3 for p in psfs):
+    if (not blind or bootstrap) and any(p is not None and np.ndim(p) == 3 for p in psfs):
         raise ValueError(
             "psfs: multi-frame data (one PSF per frame) can be re-simulated through their estimated "
-            "PSFs (d_over_r0=None), not through new screens"
+            "blind PSFs (blind=True, d_over_r0=None), not through new screens or known PSFs"
         )
     if bootstrap:
         R = int(BOOTSTRAP_REPLICATES if replicates is None else replicates)

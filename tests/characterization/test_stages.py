@@ -483,10 +483,15 @@ def test_layout_refinement_restores_with_the_psf_it_found(monkeypatch):
     monkeypatch.setattr(deconvolution, "layout_psf", fake_layout_psf)
     rest = restore(acq, RestoreSettings(iterations=5, psf_refine="layout"), seed=1)
     assert seen["start"].iterations == 5  # the blind EM's estimate started it
-    support = rest.psf > 0
+    # the blind support: a disc of a quarter of the field about the grid's centre
+    Hp, Wp = rest.psf.shape
+    yy, xx = np.mgrid[0:Hp, 0:Wp]
+    support = np.hypot(yy - Hp // 2, xx - Wp // 2) <= cfg.image_size / 4
     truth = resample_psf(acq.psf_true, rest.psf.shape) * support
     np.testing.assert_allclose(rest.psf, truth / truth.sum(), rtol=1e-9, atol=1e-15)
     assert rest.loglik.size == LAYOUT_FINAL_ITERATIONS + 1
+    with pytest.raises(ValueError, match="single-frame"):  # before any EM runs
+        restore(acq, RestoreSettings(iterations=5, psf_refine="layout", frames=2), seed=1)
     assert np.all(np.diff(rest.loglik) >= -1e-10 * abs(rest.loglik[-1]))  # Richardson-Lucy
 
 

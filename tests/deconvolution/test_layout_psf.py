@@ -63,10 +63,10 @@ def _distance(h, truth):
 
 
 def test_the_few_material_object_brings_the_psf_closer_to_the_truth():
-    """Three plates through three screens (D/r0 5): every PSF moves closer to the truth than the blind EM's
+    """One plate through three screens (D/r0 5): every PSF moves closer to the truth than the blind EM's
     start, by 0.2-0.35 in L1 (2 = disjoint); the materials come out with the rendered brightness ratio and
-    the metal's DOLP. The paint's DOLP is biased high (0.8-1.0 for 0.8) where the PSF stays off: its halo
-    part explains too much of the paint's light by the metal's."""
+    the metal's DOLP. The paint's DOLP is not asserted: it is biased high (0.8-1.0 for 0.8) where the PSF
+    stays off, its halo explaining too much of the paint's light by the metal's."""
     gains = []
     for seed in range(3):
         counts, A, truth, start = _data(seed)
@@ -86,9 +86,8 @@ def test_the_few_material_object_brings_the_psf_closer_to_the_truth():
         assert res.psf.sum() == pytest.approx(1.0) and res.psf.min() >= 0
         np.testing.assert_allclose(res.layout.sum(axis=0), 1.0, rtol=1e-12)
         metal, paint = np.argmax(res.s0), np.argmin(res.s0)
-        assert res.s0[metal] / res.s0[paint] == pytest.approx(10.0, rel=0.25)
+        assert res.s0[metal] / res.s0[paint] == pytest.approx(10.0, rel=0.15)
         assert res.dolp[metal] == pytest.approx(0.02, abs=0.02)
-        assert 0.75 <= res.dolp[paint] <= 1.0
     assert min(gains) > 0.15 and np.mean(gains) > 0.25, gains
 
 
