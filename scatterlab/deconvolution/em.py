@@ -866,17 +866,27 @@ class _StokesBasis:
 
     def object_spectra(self, s0, P):
         """Spectra of the Stokes images B = (S0, P S0 cos 2alpha[, P S0 sin 2alpha]), (J, Hp, Wr)."""
-        return self.ops.rfft(np.concatenate([s0[None], (P * s0)[None] * self.trig]))
+        return self.stokes_spectra(s0, P * s0)
 
-    def frame_loglik(self, f, Hf, Bf, d, valid):
+    def stokes_spectra(self, s0, ps0):
+        """:meth:`object_spectra` from S0 and the polarized irradiance P S0 ``(Hp, Wp)``."""
+        return self.ops.rfft(np.concatenate([s0[None], ps0[None] * self.trig]))
+
+    def frame_residual(self, f, Hf, Bf, d, valid):
         """Poisson log-likelihood of frame ``f`` (its channels ``d``) through the OTF ``Hf`` of one PSF, and
-        its gradient with respect to that (centred) PSF: sum_n (d_n / i_n - 1) correlated with o_n."""
+        the spectra ``(J, Hp, Wr)`` of its residuals sum_n A_nj (d_n / i_n - 1), from which the gradients
+        follow: with respect to the PSF by correlation with the object, to the Stokes images with the PSF."""
         A = self.A[f]  # (K / F, J)
         i = np.tensordot(A, self.ops.crop(self.ops.irfft(Bf * Hf)), axes=1)
         i = np.maximum(i, 1e-300)
         L = float(np.vdot(d, np.log(i))) - float(np.sum(i * valid))
         r = np.where(valid, d / i - 1.0, 0.0)
-        R = self.ops.rfft(self.ops.extend(np.tensordot(A.T, r, axes=1)))  # (J, Hp, Wr)
+        return L, self.ops.rfft(self.ops.extend(np.tensordot(A.T, r, axes=1)))
+
+    def frame_loglik(self, f, Hf, Bf, d, valid):
+        """Poisson log-likelihood of frame ``f`` (its channels ``d``) through the OTF ``Hf`` of one PSF, and
+        its gradient with respect to that (centred) PSF: sum_n (d_n / i_n - 1) correlated with o_n."""
+        L, R = self.frame_residual(f, Hf, Bf, d, valid)
         G = sfft.fftshift(self.ops.irfft(np.sum(R * np.conj(Bf), axis=0)))
         return L, G
 

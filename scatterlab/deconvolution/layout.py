@@ -8,8 +8,9 @@ painted plate, though, is made of a few materials, each uniform at one geometry.
           \qquad \chi_m = e^{z_m} / \textstyle\sum_k e^{z_k}
 
 (M materials of irradiance :math:`a_m` [counts] and signed DOLP :math:`p_m`, a soft layout :math:`\chi_m`
-that sums to 1 at every pixel and can place an edge between pixels), the object has one degree of freedom
-per pixel fewer and none for noise within a material, and the data pin the PSF: the layout and the
+that sums to 1 at every pixel and can place an edge between pixels), the object varies only by mixing the
+M materials, never in S0 and DOLP independently (two materials: one degree of freedom per pixel instead of
+two), so it cannot fit the noise within a material, and the data pin the PSF: the layout and the
 materials are fitted by L-BFGS on the exact Poisson log-likelihood (Eq. 188 with the object above;
 analytic gradient through the softmax), the pupil phase by L-BFGS with the object held
 (:class:`~scatterlab.deconvolution.psf_update.PupilPhasePSF`, Schulz's parameterisation, Eq. 186), in
@@ -91,15 +92,11 @@ class _Objective:
         return np.tensordot(a, chi, axes=1), np.tensordot(a * p, chi, axes=1)
 
     def __call__(self, x, Hf):
-        model, ops = self.model, self.ops
+        model = self.model
         chi, a, p = self.unpack(x)
-        s0, ps0 = np.tensordot(a, chi, axes=1), np.tensordot(a * p, chi, axes=1)
-        B = np.concatenate([s0[None], ps0[None] * model.trig])  # (J, Hp, Wp)
-        A = model.A[0]  # (K, J)
-        i = np.maximum(np.tensordot(A, ops.crop(ops.irfft(ops.rfft(B) * Hf)), axes=1), 1e-300)
-        L = float(np.vdot(self.d, np.log(i))) - float(np.sum(i * self.valid))
-        r = np.where(self.valid, self.d / i - 1.0, 0.0)
-        gB = ops.irfft(ops.rfft(ops.extend(np.tensordot(A.T, r, axes=1))) * np.conj(Hf))
+        Bf = model.stokes_spectra(np.tensordot(a, chi, axes=1), np.tensordot(a * p, chi, axes=1))
+        L, R = model.frame_residual(0, Hf, Bf, self.d, self.valid)
+        gB = self.ops.irfft(R * np.conj(Hf))  # dL / d(Stokes images) (J, Hp, Wp)
         g_s0, g_ps0 = gB[0], np.sum(model.trig * gB[1:], axis=0)
         g_chi = a[:, None, None] * (g_s0 + p[:, None, None] * g_ps0)
         g_z = chi * (g_chi - np.sum(chi * g_chi, axis=0))
@@ -226,10 +223,7 @@ def layout_psf(
             bounds=bounds,
             options={"maxiter": object_steps, "gtol": 0.0, "ftol": 0.0},
         ).x
-        s0, ps0 = f.stokes(x)
-        Bf = problem.model.object_spectra(
-            s0, np.divide(ps0, s0, out=np.zeros_like(s0), where=s0 > 0)
-        )
+        Bf = problem.model.stokes_spectra(*f.stokes(x))
 
         def phase_objective(y, Bf=Bf):
             ph = np.zeros(inside.shape)

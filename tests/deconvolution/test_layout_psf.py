@@ -7,6 +7,7 @@ ones); the log-likelihood, which each descent step may only raise.
 
 import numpy as np
 import pytest
+from scatterlab.studies.performance.perf_layout_psf import painted_plate_object
 
 from scatterlab.deconvolution import blind_deconvolve, initial_psf, object_grid, resample_psf
 from scatterlab.deconvolution.layout import _Objective, layout_psf
@@ -23,22 +24,13 @@ N = 48
 RADIUS, PAD = N / 4, N // 4
 
 
-def _plate(n):
-    """Paint (S0 1, DOLP 0.8) with metal (S0 10, DOLP 0.02) in two corners and a bar."""
-    lab = np.zeros((n, n), int)
-    lab[: n // 3, n // 2 :] = 1
-    lab[n // 2 :, : n // 5] = 1
-    lab[n // 2 : n // 2 + 3, n // 4 : 3 * n // 4] = 1
-    s0 = np.where(lab == 1, 10.0, 1.0)
-    P = np.where(lab == 1, 0.02, 0.8)
-    return np.stack([s0, P * s0, np.zeros_like(s0)], axis=-1)
-
-
 def _data(seed):
     rng = np.random.default_rng(seed)
     A = circular_pupil(N // 2, N // 4)
     h = resample_psf(psf(A, phase_screen(N // 2, 1.0, (N // 2) / 5.0, rng), pad=2), (N, N))
-    counts = detect(channel_images(_plate(N), ANGLES_0_45_90_135, h), rng, photons=1e5)
+    # paint (S0 1, DOLP 0.8) with metal (S0 10, DOLP 0.02) in two corners and a bar
+    S, _ = painted_plate_object(N)
+    counts = detect(channel_images(S, ANGLES_0_45_90_135, h), rng, photons=1e5)
     grid = object_grid((N, N), RADIUS, pad=PAD)
     start = blind_deconvolve(
         counts,
