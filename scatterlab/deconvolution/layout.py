@@ -55,6 +55,11 @@ class LayoutResult:
         Each material's S0 [counts per pixel, both polarizations].
     dolp : ndarray, shape (M,)
         Each material's signed DOLP (S1/S0 in the frame of the AOP).
+
+        A dim material's values are not estimates of that material: the soft layout can mix a little of
+        a bright material into every pixel of a dim one and raise the dim one's DOLP to make up for it,
+        at no cost in likelihood (with the true PSF of the default scene: paint DOLP 1.00 and S0
+        12 190 counts for 0.876 and 13 820). Use the PSF, and restore the object with it held fixed.
     loglik : ndarray, shape (rounds + 1,)
         Poisson log-likelihood after each round (the first: the start PSF with the fitted layout's start).
     """
