@@ -8,6 +8,7 @@
     scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
     scatterlab analyze DATASET [--out DIR] [--force] [--psf blind|diffraction] [--iterations N]
                      [--classes adaptive|priors] [--bias-samples N] [--model-error] [--frames F]
+                     [--psf-refine none|layout]
     scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--time-convention exp(-iwt)]
 
 Sweeps inside studies use ``--workers N`` local processes or a Dask cluster
@@ -161,6 +162,7 @@ def _analyze(args) -> int:
         bias_samples=args.bias_samples,
         model_error=args.model_error,
         frames=args.frames,
+        psf_refine=args.psf_refine,
     )
     return _report(
         args,
@@ -363,6 +365,13 @@ def main(argv=None) -> int:
         default=1,
         help="exposures per geometry: the channels are F consecutive groups, each through its own "
         "turbulence (default 1)",
+    )
+    an.add_argument(
+        "--psf-refine",
+        choices=["none", "layout"],
+        default="none",
+        help="refine each blind PSF with a few-material object (with --frames F > 1: one layout "
+        "shared by the frames, whole-field PSFs; tens of times the restoration's cost)",
     )
     an.add_argument(
         "--sigma", type=float, default=0.3, help="known roughness (rms facet slope, default 0.3)"

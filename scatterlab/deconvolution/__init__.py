@@ -5,8 +5,9 @@
 * :mod:`priors` -- super-Gaussian DOLP priors (Eq. 195), the MAP DOLP update (Eq. 196), adaptive priors;
 * classification: several priors given to :func:`blind_deconvolve` label each pixel by the prior whose
   update maximizes the objective; :func:`classification_errors` scores a label map like Table 4;
-* :func:`layout_psf` -- one frame's PSF found with a few-material object (each material uniform, a soft
-  layout): the prior a single frame's likelihood needs to tell the PSF.
+* :func:`layout_psf` -- the PSF of one frame, or of each of several exposures, found with a few-material
+  object (each material uniform; a soft layout, or pure interiors with mixing only along the edges): the
+  prior a single frame's likelihood needs to tell the PSF.
 """
 
 from scatterlab.deconvolution.classify import classification_errors, classify_dolp

@@ -72,7 +72,7 @@ def painted_plate_object(n):
     return np.stack([s0, P * s0, np.zeros_like(s0)], axis=-1), P
 
 
-def _best_shift(h, truth, reach=8):
+def best_shift(h, truth, reach=8):
     """The integer shift (dy, dx) that brings ``h`` nearest ``truth`` in L1, and that distance."""
     return min(
         (float(np.abs(np.roll(h, (a, b), (0, 1)) - truth).sum()), (a, b))
@@ -124,7 +124,7 @@ def run(ctx):
                 )
                 found.append((R, h_R, time.perf_counter() - t0))
             for label, h_R, secs in found:
-                dist, shift = _best_shift(h_R, truth)
+                dist, shift = best_shift(h_R, truth)
                 res = blind_deconvolve(
                     counts,
                     ANGLES_0_45_90_135,

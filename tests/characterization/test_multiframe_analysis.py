@@ -171,3 +171,49 @@ def test_multi_frame_psfs_are_re_simulated_only_through_their_blind_estimates(bl
             blind=blind,
             d_over_r0=d_over_r0,
         )
+
+
+def test_psf_refine_must_be_none_or_layout():
+    with pytest.raises(ValueError, match="psf_refine must be 'none' or 'layout'"):
+        AnalyzeSettings(psf_refine="joint").validate()
+
+
+def test_cli_psf_refine_reaches_the_data_and_the_self_calibration(tmp_path, monkeypatch):
+    """--psf-refine layout: every blind restoration, the data's and the self-calibration's re-simulations
+    alike (their bias must be the data's), goes through layout_psf with all its frames (the function
+    itself is tested against simulated truth in tests/deconvolution/test_layout_psf.py)."""
+    import scatterlab.deconvolution as deconvolution
+    from scatterlab.deconvolution import LayoutResult, resample_psf
+    from scatterlab.io import write_dataset
+
+    calls = []
+
+    def fake_layout_psf(data, angles, start, **kw):
+        calls.append(kw["frames"])
+        shape = (data.shape[-1] + 2 * kw["pad"],) * 2
+        return LayoutResult(np.stack([resample_psf(h, shape) for h in start.psfs]), *[None] * 5)
+
+    monkeypatch.setattr(deconvolution, "layout_psf", fake_layout_psf)
+    path = tmp_path / "two.h5"
+    write_dataset(path, _two_frame_dataset(size=32))
+    args = ["--iterations", "3", "--posterior-steps", "200", "--bias-samples", "1"]
+    out = tmp_path / "a"
+    assert (
+        main(
+            [
+                "analyze",
+                str(path),
+                "--out",
+                str(out),
+                "--frames",
+                "2",
+                *args,
+                "--psf-refine",
+                "layout",
+            ]
+        )
+        == 0
+    )
+    assert json.loads((out / "summary.json").read_text())["settings"]["psf_refine"] == "layout"
+    assert "PSFs refined with a few-material layout" in (out / "report.md").read_text()
+    assert calls == [2] * 4, calls  # 2 geometries: the data and one re-simulation each

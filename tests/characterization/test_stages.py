@@ -490,9 +490,32 @@ def test_layout_refinement_restores_with_the_psf_it_found(monkeypatch):
     truth = resample_psf(acq.psf_true, rest.psf.shape) * support
     np.testing.assert_allclose(rest.psf, truth / truth.sum(), rtol=1e-9, atol=1e-15)
     assert rest.loglik.size == LAYOUT_FINAL_ITERATIONS + 1
-    with pytest.raises(ValueError, match="single-frame"):  # before any EM runs
-        restore(acq, RestoreSettings(iterations=5, psf_refine="layout", frames=2), seed=1)
     assert np.all(np.diff(rest.loglik) >= -1e-10 * abs(rest.loglik[-1]))  # Richardson-Lucy
+
+    # two exposures: one shared layout, the whole field as support, a PSF per frame held fixed
+    from dataclasses import replace
+
+    other = acquire(Plate(), plate_labels(cfg, rng), np.radians(50.0), "D_r0_7.9", 7.9, cfg, rng)
+    two = replace(
+        acq,
+        counts=np.concatenate([acq.counts, other.counts]),
+        angles=np.tile(acq.angles, 2),
+    )
+    truths = np.stack([acq.psf_true, other.psf_true])
+
+    def fake_layout_frames(data, angles, start, **kw):
+        seen.update(kw)
+        shape = (32 + 2 * kw["pad"],) * 2
+        return LayoutResult(np.stack([resample_psf(h, shape) for h in truths]), *[None] * 5)
+
+    monkeypatch.setattr(deconvolution, "layout_psf", fake_layout_frames)
+    rest = restore(two, RestoreSettings(iterations=5, psf_refine="layout", frames=2), seed=1)
+    assert seen["frames"] == 2 and seen["materials"] == 2
+    assert seen["pad"] == 16 and seen["psf_radius"] == pytest.approx(np.sqrt(2) * 16)
+    assert rest.psf.shape == (2, 64, 64)
+    for h, true in zip(rest.psf, truths):  # whole field: nothing cut
+        np.testing.assert_allclose(h, resample_psf(true, (64, 64)), rtol=1e-9, atol=1e-15)
+    assert rest.loglik.size == LAYOUT_FINAL_ITERATIONS + 1
 
 
 def test_a_region_whose_truth_is_outside_the_joint_95_region_is_told_not_to_be_trusted():

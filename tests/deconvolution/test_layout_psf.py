@@ -1,16 +1,18 @@
-"""The few-material object that lets one frame's likelihood find its PSF (scatterlab.deconvolution.layout).
+"""The few-material object that lets the likelihood find the PSFs (scatterlab.deconvolution.layout).
 
-Independent truths: finite differences of the objective; the true PSF and object of a simulated two-material
-plate (the PSF found is closer to the truth than the blind EM's, and the metal's DOLP is the rendered
-one); the log-likelihood, which each descent step may only raise.
+Independent truths: finite differences of the objective; the true PSFs and object of a simulated
+two-material plate (the PSFs found are closer to the truth than the blind EM's; the metal's DOLP, and with
+pure interiors the paint's, are the rendered ones); the log-likelihood, which each descent step may only
+raise.
 """
 
 import numpy as np
 import pytest
+from scatterlab.studies.performance.perf_layout_frames import exposures
 from scatterlab.studies.performance.perf_layout_psf import painted_plate_object
 
 from scatterlab.deconvolution import blind_deconvolve, initial_psf, object_grid, resample_psf
-from scatterlab.deconvolution.layout import _Objective, layout_psf
+from scatterlab.deconvolution.layout import _Objective, edge_band_mask, layout_psf
 from scatterlab.imaging import (
     ANGLES_0_45_90_135,
     channel_images,
@@ -85,22 +87,27 @@ def test_the_few_material_object_brings_the_psf_closer_to_the_truth():
     assert min(gains) > 0.15 and np.mean(gains) > 0.25, gains
 
 
-def test_the_objective_gradient_matches_finite_differences():
+@pytest.mark.parametrize("frames", [1, 2])
+def test_the_objective_gradient_matches_finite_differences(frames):
+    """One frame, and two frames through different OTFs sharing the object."""
     from scatterlab.deconvolution.em import _resolve_options, _setup
 
     rng = np.random.default_rng(1)
-    counts = rng.poisson(50.0, (4, 12, 12)).astype(float)
+    counts = rng.poisson(50.0, (4 * frames, 12, 12)).astype(float)
     A = circular_pupil(6, 3)
-    opts = _resolve_options(None, dict(psf_mode="phase", psf_radius=3.0, pad=3, aop=0.3))
-    problem, state = _setup(counts, ANGLES_0_45_90_135, None, A, opts)
+    opts = _resolve_options(
+        None, dict(psf_mode="phase", psf_radius=3.0, pad=3, aop=0.3, frames=frames)
+    )
+    problem, state = _setup(counts, np.tile(ANGLES_0_45_90_135, frames), None, A, opts)
     f = _Objective(problem, 3)
     x = np.concatenate([rng.normal(0, 1, f.n), np.log([40.0, 60.0, 20.0]), [0.2, -0.4, 0.7]])
-    Hf = problem.ops.otf(state.h[0])
-    _, g = f(x, Hf)
+    shifted = np.roll(state.h[0], (1, -1), (0, 1))  # a second, different PSF
+    Hfs = [problem.ops.otf(h) for h in (state.h[0], shifted)[:frames]]
+    _, g = f(x, Hfs)
     for k in [*rng.choice(f.n, 6, replace=False), *range(f.n, f.n + 6)]:
         e = np.zeros_like(x)
         e[k] = 1e-6
-        fd = (f(x + e, Hf)[0] - f(x - e, Hf)[0]) / 2e-6
+        fd = (f(x + e, Hfs)[0] - f(x - e, Hfs)[0]) / 2e-6
         assert g[k] == pytest.approx(fd, rel=1e-4, abs=1e-10), k
 
 
@@ -115,8 +122,6 @@ def test_bad_input_names_the_argument():
     ):
         with pytest.raises(ValueError, match=name):
             layout_psf(counts, ANGLES_0_45_90_135, start, **kw, **{name: value})
-    with pytest.raises(ValueError, match="object grid"):
-        layout_psf(counts, ANGLES_0_45_90_135, start, pupil=A, psf_radius=RADIUS, pad=PAD + 2)
     with pytest.raises(ValueError, match="phase0"):
         layout_psf(counts, ANGLES_0_45_90_135, start, **kw, phase0=np.zeros((3, 3)))
     two = blind_deconvolve(
@@ -127,5 +132,80 @@ def test_bad_input_names_the_argument():
         psf_radius=RADIUS,
         pad=PAD,
     )
-    with pytest.raises(ValueError, match="single-frame"):
+    with pytest.raises(ValueError, match="one PSF per frame"):
         layout_psf(np.concatenate([counts, counts]), np.tile(ANGLES_0_45_90_135, 2), two, **kw)
+    with pytest.raises(ValueError, match="one PSF per frame"):
+        layout_psf(counts, ANGLES_0_45_90_135, start, **kw, frames=2)
+    for value in (-1, 1.5, True):
+        with pytest.raises(ValueError, match="edge_band"):
+            layout_psf(counts, ANGLES_0_45_90_135, start, **kw, edge_band=value)
+    with pytest.raises(ValueError, match="frames"):
+        layout_psf(counts, ANGLES_0_45_90_135, start, **kw, frames=0)
+    with pytest.raises(ValueError, match="phase0"):
+        layout_psf(
+            np.concatenate([counts, counts]),
+            np.tile(ANGLES_0_45_90_135, 2),
+            two,
+            **kw,
+            frames=2,
+            phase0=np.zeros((3, N // 2, N // 2)),
+        )
+
+
+def test_edge_band_marks_the_pixels_near_another_label():
+    lab = np.zeros((6, 8), int)
+    lab[:, 4:] = 1
+    band1 = edge_band_mask(lab, 1)
+    assert band1[:, 3:5].all() and not band1[:, :3].any() and not band1[:, 5:].any()
+    band2 = edge_band_mask(lab, 2)
+    assert band2[:, 2:6].all() and not band2[:, :2].any() and not band2[:, 6:].any()
+    assert not edge_band_mask(lab, 0).any()
+    assert not edge_band_mask(np.zeros((4, 4), int), 3).any()  # one material: no edge
+
+
+def test_exposures_sharing_a_pure_layout_find_their_psfs_and_the_paint():
+    """Three exposures, whole-field PSF support, pure interiors (edge band 2): each PSF ends closer to its
+    truth than the blind EM's (by 0.3-0.5 in L1 in this set-up) and the paint's DOLP is identified (0.80
+    rendered; the soft layout gives 0.95 on the same data), with the brightness ratio of 10."""
+    F = 3
+    # rendered like the characterization's acquisition: no light wraps around (a whole-field PSF needs it)
+    A, hs, counts, angles = exposures(N, F, 5.0, np.random.default_rng(0))
+    grid = object_grid((N, N), RADIUS, pad=PAD)
+    start = blind_deconvolve(
+        counts,
+        angles,
+        psf0=np.stack([initial_psf(A, grid, rng=k) for k in range(F)]),
+        psf_mode="pupil",
+        pupil=A,
+        psf_radius=RADIUS,
+        pad=PAD,
+        iterations=60,
+        frames=F,
+    )
+    whole = np.sqrt(2) * N / 2, N // 2  # the whole field: the start's PSFs are padded onto it
+    res = layout_psf(
+        counts,
+        angles,
+        start,
+        pupil=A,
+        psf_radius=whole[0],
+        pad=whole[1],
+        frames=F,
+        materials=2,
+        edge_band=2,
+        rounds=30,
+        rng=0,
+    )
+    shape = object_grid((N, N), whole[0], pad=whole[1])
+    assert res.psf.shape == (F,) + shape and res.pupil_phase.shape == (F, N // 2, N // 2)
+    for h, h0, true in zip(res.psf, start.psfs, hs):
+        truth = resample_psf(true, shape)
+        gain = _distance(resample_psf(h0, shape), truth) - _distance(h, truth)
+        assert gain > 0.25, gain
+        assert h.sum() == pytest.approx(1.0) and h.min() >= 0
+    metal, paint = np.argmax(res.s0), np.argmin(res.s0)
+    assert res.s0[metal] / res.s0[paint] == pytest.approx(10.0, rel=0.03)
+    assert res.dolp[paint] == pytest.approx(0.8, abs=0.03)
+    assert res.dolp[metal] == pytest.approx(0.02, abs=0.01)
+    interior = ~edge_band_mask(np.argmax(res.layout, axis=0), 2)
+    assert np.all(res.layout.max(axis=0)[interior] > 1 - 1e-12)  # held pure
