@@ -35,12 +35,18 @@ mixed into every pixel (:class:`LayoutResult`), so every pixel farther than b pi
 current hard layout (the argmax of the shares) is held pure, and only the band along the edges mixes. The
 band follows the edges: it is redrawn after each round's object fit.
 
-Measured on the default scene's aluminium plate at 50 deg, D/r0 7.9 (seed 1; two materials, ``edge_band``
-1, the whole field as PSF support, 40 rounds from each exposure's blind EM; prototype of this function):
-four exposures sharing one pure layout brought the PSFs to L1 0.46-0.52 (from 0.98-1.11), the paint to
-13 800 counts and DOLP 0.878 (truth 13 820 and 0.876), and the first exposure's classification, after 600
-known-PSF iterations, to the true PSF's (0.034 against 0.033). One exposure alone, from the same start:
-PSF L1 0.88. At D/r0 12.9, 40 rounds of four exposures reached L1 0.83-0.97 (still falling).
+Measured on four exposures of the default scene's aluminium plate at 50 deg, D/r0 7.9 (each through its own
+screen with the full photon budget; two materials, the whole field as PSF support, 30 rounds from the
+multi-frame blind EM, whose PSFs are 1.10-1.17 from the truth in L1 after the best shift; classification of
+the first exposure restored with its PSF for 600 known-PSF iterations, against the no-turbulence
+classification; with the true PSF 0.033, with the blind EM's 0.054):
+
+* soft layout: PSFs 0.78-0.87, classification 0.030; the paint's fitted DOLP 1.00 (truth 0.876);
+* pure interiors, ``edge_band`` 2: PSFs 1.00-1.02, classification 0.033; the paint 13 550 counts and DOLP
+  0.891 (truth 13 820 and 0.876); ``edge_band`` 1 (40 rounds): 0.92-0.98, 0.036, DOLP 0.913.
+
+So the soft layout finds the better PSFs and pure interiors the material values
+(``studies/performance/perf_layout_frames.py`` measures both against the rounds and the time).
 
 Scope: one PSF per frame shared by its channels, the AOP fixed by the geometry (``aop``, default 0).
 """
@@ -305,7 +311,7 @@ def layout_psf(
     x = np.concatenate([z.ravel(), np.log(a), p])
     # ln a held within 1e-9 .. 1e3 of the brightest pixel's S0 scale: an L-BFGS line search may otherwise
     # try a step whose exp overflows (seen on a re-simulated scene)
-    top = max(float(np.max(data)), 1.0) * 2.0
+    top = max(float(problem.d.max()), 1.0) * 2.0
     value_bounds = [(np.log(1e-9 * top), np.log(1e3 * top))] * materials
     value_bounds += [(-1.0, 1.0)] * materials
     x[f.n : f.n + materials] = np.clip(x[f.n : f.n + materials], *value_bounds[0])

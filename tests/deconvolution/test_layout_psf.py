@@ -141,6 +141,8 @@ def test_bad_input_names_the_argument():
             layout_psf(counts, ANGLES_0_45_90_135, start, **kw, edge_band=value)
     with pytest.raises(ValueError, match="frames"):
         layout_psf(counts, ANGLES_0_45_90_135, start, **kw, frames=0)
+    with pytest.raises(ValueError, match="data holds no photons"):
+        layout_psf(np.zeros_like(counts), ANGLES_0_45_90_135, start, **kw)
     with pytest.raises(ValueError, match="phase0"):
         layout_psf(
             np.concatenate([counts, counts]),
