@@ -167,8 +167,9 @@ def test_edge_band_marks_the_pixels_near_another_label():
 
 def test_exposures_sharing_a_pure_layout_find_their_psfs_and_the_paint():
     """Three exposures, whole-field PSF support, pure interiors (edge band 2): each PSF ends closer to its
-    truth than the blind EM's (by 0.3-0.5 in L1 in this set-up) and the paint's DOLP is identified (0.80
-    rendered; the soft layout gives 0.95 on the same data), with the brightness ratio of 10."""
+    truth than the blind EM's (here from 0.94-1.04 to 0.38-0.45 in L1) and the paint's DOLP is identified
+    (0.801 for 0.80 rendered; the soft layout gives 0.975 on the same data), with the brightness ratio of
+    10."""
     F = 3
     # rendered like the characterization's acquisition: no light wraps around (a whole-field PSF needs it)
     A, hs, counts, angles = exposures(N, F, 5.0, np.random.default_rng(0))
