@@ -57,7 +57,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LayoutResult", "layout_psf"]
+__all__ = ["LayoutResult", "edge_band_mask", "layout_psf"]
 
 
 @dataclass

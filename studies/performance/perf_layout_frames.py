@@ -180,11 +180,14 @@ def run(ctx):
     ctx.metrics["scene"] = {"size": n, "d_over_r0": 5.0, "iterations": iterations}
 
     pyplot = plt()
-    fig, ax = pyplot.subplots(1, 2, figsize=(10, 4))
+    fig, ax = pyplot.subplots(1, 2, figsize=(10, 4), layout="constrained")
     for F in frame_counts:
         sel = [r for r in rows if r["frames"] == F and r["layout"] != "soft"]
         ax[0].plot(
-            [r["rounds"] for r in sel], [r["psf_l1_error"] for r in sel], "o-", label=f"F = {F}"
+            [r["rounds"] for r in sel],
+            [r["psf_l1_error"] for r in sel],
+            "o-",
+            label=f"F = {F}, pure",
         )
         ax[1].plot(
             [r["seconds"] for r in sel[1:]],
@@ -193,6 +196,7 @@ def run(ctx):
             label=f"F = {F}, pure",
         )
         soft = next(r for r in rows if r["frames"] == F and r["layout"] == "soft")
+        ax[0].plot(soft["rounds"], soft["psf_l1_error"], "x", ms=9, label=f"F = {F}, soft")
         ax[1].plot(
             soft["seconds"], abs(soft["paint_dolp_error"]), "x", ms=9, label=f"F = {F}, soft"
         )

@@ -196,24 +196,10 @@ def test_cli_psf_refine_reaches_the_data_and_the_self_calibration(tmp_path, monk
     monkeypatch.setattr(deconvolution, "layout_psf", fake_layout_psf)
     path = tmp_path / "two.h5"
     write_dataset(path, _two_frame_dataset(size=32))
-    args = ["--iterations", "3", "--posterior-steps", "200", "--bias-samples", "1"]
     out = tmp_path / "a"
-    assert (
-        main(
-            [
-                "analyze",
-                str(path),
-                "--out",
-                str(out),
-                "--frames",
-                "2",
-                *args,
-                "--psf-refine",
-                "layout",
-            ]
-        )
-        == 0
-    )
+    argv = ["analyze", str(path), "--out", str(out), "--frames", "2", "--psf-refine", "layout"]
+    argv += ["--iterations", "3", "--posterior-steps", "200", "--bias-samples", "1"]
+    assert main(argv) == 0
     assert json.loads((out / "summary.json").read_text())["settings"]["psf_refine"] == "layout"
     assert "PSFs refined with a few-material layout" in (out / "report.md").read_text()
     assert calls == [2] * 4, calls  # 2 geometries: the data and one re-simulation each
