@@ -254,6 +254,8 @@ def reduced_coefficients(
         return _reduced_pec(eta, c, derivative)
     if not checked:
         eta, c = _check_index_and_cosine(eta, c)
+        if sin2_theta is not None:
+            sin2_theta = _check_sin2(sin2_theta, c)
     cos2 = c * c
     s2 = (1 - c) * (1 + c) if sin2_theta is None else np.asarray(sin2_theta, float)
     u = _normal_term(eta, cos2, s2)
@@ -287,6 +289,14 @@ def _check_index_and_cosine(eta, c):
     if np.any((c < 0) | (c > 1)):
         raise ValueError("cos_theta must be in [0, 1]")
     return broadcast(eta=eta, cos_theta=c)
+
+
+def _check_sin2(sin2_theta, c):
+    """``sin2_theta`` validated: in ``[0, 1]`` and equal to ``1 - cos_theta^2`` up to rounding."""
+    s2 = as_finite(sin2_theta, "sin2_theta")
+    if np.any((s2 < 0) | (s2 > 1) | (np.abs(c * c + s2 - 1) > 1e-9)):
+        raise ValueError("sin2_theta must be in [0, 1] and equal 1 - cos_theta**2 (to 1e-9)")
+    return s2
 
 
 def _normalized(rs, rp, f, drs, drp) -> ReducedFresnel:
@@ -553,6 +563,7 @@ def pseudo_brewster_angle(eta, *, xtol: float = 1e-12) -> np.ndarray:
     theta_pB : ndarray [rad], shape of ``eta``.
     """
     eta = as_index(eta)
+    xtol = float(as_positive(xtol, "xtol"))
     out = np.empty(eta.shape)
     for idx, e in np.ndenumerate(eta):
         if e.imag == 0:

@@ -50,6 +50,7 @@ from pathlib import Path
 import numpy as np
 from scipy import interpolate, special
 
+from scatterlab._checks import as_angle, as_positive
 from scatterlab.pbrdf.shadowing import SHADOWING, shadowing_strategy
 
 __all__ = [
@@ -153,9 +154,11 @@ def dhr_beckmann(
     from scatterlab.pbrdf.distributions import Beckmann
 
     strategy = shadowing_strategy(shadowing)
-    n_outer = n_outer or strategy.quadrature_nodes
-    n_inner = n_inner or strategy.quadrature_nodes
-    theta = np.atleast_1d(np.asarray(theta_i, float))
+    n_outer = _nodes(n_outer or strategy.quadrature_nodes, "n_outer")
+    n_inner = _nodes(n_inner or strategy.quadrature_nodes, "n_inner")
+    window = float(as_positive(window, "window"))
+    sigma = float(Beckmann(float(as_positive(sigma, "sigma"))).sigma)  # [1e-4, 5]
+    theta = np.atleast_1d(as_angle(theta_i, "theta_i"))
     c = np.cos(theta)[:, None]
     s = np.maximum(np.sin(theta), 1e-9)[:, None]
     K = window * sigma
@@ -172,6 +175,13 @@ def dhr_beckmann(
     if strategy.conserves_energy:
         rho = np.minimum(rho, 1.0)
     return rho.reshape(np.shape(theta_i))
+
+
+def _nodes(n, name: str) -> int:
+    """A quadrature order: an integer >= 1."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"{name} must be an integer >= 1, got {n!r}")
+    return int(n)
 
 
 def _outer_nodes(c, s, sigma, K, strategy, n_outer):
@@ -255,16 +265,20 @@ def dhr_sphere_unshadowed(theta_i, sigma) -> np.ndarray:
     Returns
     -------
     ndarray
-        The DHR (dimensionless, in [0, 1]), broadcast shape.
+        The DHR (dimensionless, >= 0), broadcast shape. It exceeds 1 where facets reflect into the
+        lower hemisphere (the unshadowed model does not conserve energy, Figs. 27-28) and grows like
+        ``sigma tan(theta_i) / sqrt(2 pi)`` towards grazing incidence: ``inf`` at exactly 90 deg.
     """
-    theta = np.asarray(theta_i, float)
-    sigma = np.asarray(sigma, float)
+    theta = as_angle(theta_i, "theta_i")
+    sigma = as_positive(sigma, "sigma")
+    grazing = theta == np.pi / 2
+    t = np.where(grazing, 0.0, theta)
     with np.errstate(divide="ignore"):
-        a = np.cos(theta) / (np.sin(theta) * sigma)
+        a = np.cos(t) / (np.sin(t) * sigma)
         term = np.where(
-            np.isfinite(a), np.tan(theta) * sigma * np.exp(-0.5 * a * a) / np.sqrt(2 * np.pi), 0.0
+            np.isfinite(a), np.tan(t) * sigma * np.exp(-0.5 * a * a) / np.sqrt(2 * np.pi), 0.0
         )
-    return special.ndtr(a) + term
+    return np.where(grazing, np.inf, special.ndtr(a) + term)
 
 
 class DHRTable:
@@ -509,7 +523,8 @@ def dhr_slope_quadrature(
         The DHR (dimensionless), shape of ``theta_i``.
     """
     strategy = shadowing_strategy(shadowing)
-    theta = np.atleast_1d(np.asarray(theta_i, float))
+    theta = np.atleast_1d(as_angle(theta_i, "theta_i"))
+    n_w, n_psi = _nodes(n_w, "n_w"), _nodes(n_psi, "n_psi")
     xw, ww = np.polynomial.legendre.leggauss(n_w)
     w = (xw + 1) / 2
     r = distribution.radial_quantile(w)[:, None]

@@ -186,17 +186,13 @@ class Model:
     def _diffuse_factor(self, theta_i, theta_r) -> np.ndarray:
         if self.diffuse == "none":
             return np.zeros(np.broadcast_shapes(np.shape(theta_i), np.shape(theta_r)))
-        rho_i = self._dhr(theta_i)
+        deficit_i = _deficit(self._dhr(theta_i))
         if self.diffuse == "hyde":
-            return np.maximum(1 - rho_i, 0.0) / np.pi
-        rho_r = self._dhr(theta_r)
+            return deficit_i / np.pi
+        deficit_r = _deficit(self._dhr(theta_r))
         avg = self._dhr.cosine_average()
         with np.errstate(divide="ignore", invalid="ignore"):
-            d = (
-                np.maximum(1 - rho_i, 0)
-                * np.maximum(1 - rho_r, 0)
-                / (np.pi * np.maximum(1 - avg, 1e-300))
-            )
+            d = deficit_i * deficit_r / (np.pi * np.maximum(1 - avg, 1e-300))
         return np.where(avg < 1, d, 0.0)
 
     # ------------------------------------------------------------------ evaluation
@@ -285,7 +281,9 @@ class Model:
         :math:`\frac{R_s - R_p}{R_s + R_p}\,\frac{\Gamma}{\Gamma + D}`. Where the specular term
         vanishes (far from the lobe) it is 0 with a diffuse term; NaN where no light is reflected
         (:math:`F_{00} = 0`: ``eta = 1`` exactly, or ``diffuse="none"`` where the specular term
-        vanishes or underflows).
+        vanishes or underflows, or both terms underflow far from the lobe of a smooth surface). This
+        is the DOLP of the light, a measurement; the inversion's forward model
+        (:class:`scatterlab.inversion.forward.DolpForward`) is the formula, finite everywhere.
 
         Parameters
         ----------
@@ -361,6 +359,19 @@ class Model:
             log_gamma = np.log(self._gamma_over_pdf(geo)) - t2 / (2 * s2) - np.log(2 * np.pi * s2)
             log_d = np.log(self._diffuse_factor(ti, tr))
         return np.where(finite, log_gamma, -np.inf), log_d
+
+
+DHR_ROUNDING = 1e-14
+"""A specular DHR this close to 1 is 1: the tables and quadratures are accurate to about 1e-15
+absolute, so a smaller deficit ``1 - rho`` is rounding, not diffuse light. Without this the diffuse
+factor of a smooth surface near normal incidence was 5.6e-16 or 0 depending on the DHR's code path,
+and far from the lobe (where Gamma underflows) the DOLP flipped between 0 and the facet's DOLP."""
+
+
+def _deficit(rho):
+    """``1 - rho``, non-negative, and 0 within :data:`DHR_ROUNDING` of 1."""
+    d = 1 - np.asarray(rho, float)
+    return np.where(d > DHR_ROUNDING, d, 0.0)
 
 
 def _geometry(ti, tr, ph):

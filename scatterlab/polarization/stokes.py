@@ -139,7 +139,8 @@ def dop(S) -> np.ndarray:
     ndarray, shape ``(...)``; in [0, 1] for a physical Stokes vector.
     """
     S = _stokes(S)
-    return _ratio(np.sqrt(S[..., 1] ** 2 + S[..., 2] ** 2 + S[..., 3] ** 2), S[..., 0])
+    # hypot, not the root of a sum of squares, which overflows from |S| ~ 1e154
+    return _ratio(np.hypot(np.hypot(S[..., 1], S[..., 2]), S[..., 3]), S[..., 0])
 
 
 def dolp(S, *, min_intensity: float = 0.0) -> np.ndarray:
@@ -232,6 +233,8 @@ def dolp_aop(S, *, min_intensity: float = 0.0, mask: bool = False):
 def is_physical_stokes(S, atol: float = 1e-12) -> np.ndarray:
     """True where ``S0 >= sqrt(S1^2 + S2^2 + S3^2)`` (within ``atol * S0``) and ``S0 >= 0``.
 
+    The tolerance is relative only, so the test does not depend on the units of ``S``.
+
     Parameters
     ----------
     S : array_like, shape ``(..., 4)``
@@ -242,5 +245,5 @@ def is_physical_stokes(S, atol: float = 1e-12) -> np.ndarray:
     ndarray of bool, shape ``(...)``.
     """
     S = _stokes(S)
-    pol = np.sqrt(S[..., 1] ** 2 + S[..., 2] ** 2 + S[..., 3] ** 2)
-    return (S[..., 0] >= 0) & (pol <= S[..., 0] * (1 + atol) + atol)
+    pol = np.hypot(np.hypot(S[..., 1], S[..., 2]), S[..., 3])
+    return (S[..., 0] >= 0) & (pol <= S[..., 0] * (1 + atol))

@@ -196,7 +196,7 @@ def test_extreme_inputs_no_nan_overflow_or_negative_diffuse():
     th = np.r_[0, np.radians([1, 30, 60, 85, 89, 89.99]), np.pi / 2]
     TI, TR, PH = np.meshgrid(th, th, [0.0, 1.0, np.pi], indexing="ij")
     etas = [0.01 - 0j, 20 + 0j, 1.5 - 1e3j, 0.01 - 1e3j, 1 + 1e-12, PEC]
-    both_grazing = (TI == np.pi / 2) & (TR == np.pi / 2)
+    grazing_incidence = TI == np.pi / 2
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         for sigma in [1e-3, 0.05, 0.6, 1.5]:
@@ -207,16 +207,32 @@ def test_extreme_inputs_no_nan_overflow_or_negative_diffuse():
                     F = m.mueller(eta, TI, TR, PH)
                     assert np.all(np.isfinite(F)) and np.all(F[..., 0, 0] >= 0)
                     d = m.dolp(eta, TI, TR, PH)
-                    # the DOLP of zero light is NaN, and only there. No light where both directions
-                    # graze (no facet joins them; rho = 1 there, so the diffuse term vanishes too) and,
-                    # at sigma = 1e-3, where the lobe underflows while rho rounds to 1
+                    # the DOLP of zero light is NaN, and only there. No light at exactly grazing
+                    # incidence (rho = 1 there, so the diffuse term vanishes, and the lobe is 0 by
+                    # convention) and, at sigma = 1e-3, where the lobe underflows while rho is 1
                     dark = F[..., 0, 0] == 0
                     if sigma >= 0.05:
-                        assert np.all(dark <= both_grazing)
+                        assert np.all(dark <= grazing_incidence)
                     assert np.all(np.isnan(d[dark])) and np.all(np.isfinite(d[~dark]))
                     assert np.all((d[~dark] >= 0) & (d[~dark] <= 1))
             rho = Model(sigma).dhr_pec(th)
             assert np.all((rho >= 0) & (rho <= 1))
+
+
+def test_dolp_far_from_a_smooth_lobe_does_not_depend_on_how_sigma_is_given():
+    # Far from the lobe of a smooth surface both terms of F underflow. Model.dolp is then NaN (the DOLP
+    # of no light) whether sigma is a scalar or an array; it was 0 for the scalar, where the DHR's
+    # rounding (1 - rho = 5.6e-16) made a diffuse term out of nothing, and NaN for the array. The
+    # inversion's forward model, a formula, gives the facet's DOLP there (Gamma >> D).
+    from scatterlab.inversion.forward import DolpForward
+
+    ti, tr, ph = 0.02985028, 1.15450591, -2.69686975
+    for sigma in (0.01304252, np.array([0.01304252])):
+        m = Model(sigma)
+        assert np.all(m.mueller(1.5, ti, tr, ph)[..., 0, 0] == 0)
+        assert np.all(np.isnan(m.dolp(1.5, ti, tr, ph)))
+    fwd = DolpForward(np.atleast_1d(ti), np.atleast_1d(tr), ph, sigma=0.01304252)
+    assert 0.49 < float(np.squeeze(fwd([1.5, 0.0]))) < 0.51
 
 
 def test_array_sigma_broadcasts():

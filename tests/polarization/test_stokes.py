@@ -31,6 +31,16 @@ def test_is_physical_stokes():
     assert not P.is_physical_stokes([-1, 0, 0, 0])
 
 
+@pytest.mark.parametrize("scale", [1e-300, 1e-13, 1.0, 1e155, 1e300])
+def test_stokes_checks_are_scale_free(scale):
+    # a degree of polarization of 10 is unphysical at any scale, 0.5 physical at any scale; no overflow
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert not P.is_physical_stokes(scale * np.array([0.1, 1.0, 0, 0]))
+        assert P.is_physical_stokes(scale * np.array([1.0, 0.3, 0.4, 0]))
+        assert P.dop(scale * np.array([1.0, 0.3, 0.4, 0])) == pytest.approx(0.5)
+
+
 def test_bad_input():
     with pytest.raises(ValueError, match="S"):
         P.dop([1, 0, 0])
