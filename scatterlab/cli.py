@@ -28,6 +28,8 @@ def _executor(args):
 
     if args.scheduler:
         return get_executor("dask", scheduler=args.scheduler)
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers must be an integer >= 1, got {args.workers}")
     if args.workers and args.workers > 1:
         return get_executor("processes", workers=args.workers)
     return get_executor("serial")
@@ -48,7 +50,11 @@ def _study(args) -> int:
     if not args.id:
         print("scatterlab study run: give a study ID or 'all'", file=sys.stderr)
         return 2
-    ex = _executor(args)
+    try:
+        ex = _executor(args)
+    except ValueError as exc:
+        print(f"scatterlab: {exc}", file=sys.stderr)
+        return 2
     try:
         if args.id == "all":
             index, status = studies.run_all(
@@ -140,6 +146,7 @@ def _characterize(args) -> int:
             cfg.d_over_r0[:1],
         )
         cfg.iterations, cfg.posterior_steps = 15, 400
+        cfg.title = f"{cfg.title} -- quick: a smoke test, not a reproduction"
     return _report(args, lambda ex: characterize(cfg, args.out, overwrite=args.force, executor=ex))
 
 
@@ -226,6 +233,13 @@ def _fit_mueller(args) -> int:
         f"n = {fit.n:.5g} +- {e[0]:.2g}, kappa = {fit.kappa:.5g} +- {e[1]:.2g}, "
         f"sigma = {fit.sigma:.4g} +- {e[2]:.2g} ({quality})"
     )
+    if fit.circular_flip_ratio < 0.25:
+        print(
+            f"warning: the data fit {1 / fit.circular_flip_ratio:.3g} times better with their circular "
+            "elements sign-flipped: the file is probably in the other time convention "
+            "(--time-convention)",
+            file=sys.stderr,
+        )
     print(f"report: {report}")
     return 0
 
@@ -341,7 +355,14 @@ def main(argv=None) -> int:
         help="blind deconvolution (through turbulence) or the optics' known diffraction PSF",
     )
     an.add_argument("--iterations", type=int, default=150, help="EM iterations (default 150)")
-    an.add_argument("--priors", choices=["ch5", "ch6", "ch7"], default="ch7", help="DOLP prior set")
+    an.add_argument(
+        "--priors",
+        choices=["ch5", "ch6", "ch7"],
+        default="ch7",
+        help="DOLP prior set; with the default adaptive classes it only seeds their re-centring, so it "
+        "changes little: give --classes priors to classify with the set as published (ch6's three "
+        "classes are then reported as paint and metal; its EM continuation is slower)",
+    )
     an.add_argument(
         "--classes",
         choices=["adaptive", "priors"],

@@ -107,6 +107,8 @@ def test_fit_mueller_fits_a_scatmech_style_file_and_writes_its_report(tmp_path, 
     assert main(argv) == 0
     report = (out / "report.md").read_text()
     assert "Time convention?" in report and "Posterior (emcee, 24 walkers x 60 steps" in report
+    # said on the console too, not only in the file
+    assert "time convention" in capsys.readouterr().err
 
 
 def test_fit_mueller_bad_input_exit_codes(tmp_path, capsys):
@@ -126,3 +128,11 @@ def test_fit_mueller_bad_input_exit_codes(tmp_path, capsys):
     write_mueller_brdf(tmp_path / "two.csv", two)
     assert main(["fit-mueller", str(tmp_path / "two.csv"), "--out", str(tmp_path / "o")]) == 2
     assert "--wavelength-um" in capsys.readouterr().err
+
+
+def test_workers_below_one_are_refused(tmp_path, capsys):
+    assert main(["study", "run", "fig4", "--quick", "--out", str(tmp_path), "--workers", "0"]) == 2
+    assert "--workers" in capsys.readouterr().err
+    argv = ["characterize", "--quick", "--out", str(tmp_path / "c"), "--workers", "-1"]
+    assert main(argv) == 2
+    assert "--workers" in capsys.readouterr().err

@@ -85,12 +85,27 @@ def _classification(result, case, kind, mid, sel, priors):
     }
 
 
+def _at_bound(n, k) -> float:
+    """Share of fitted pixels whose n or kappa sits on a bound of the fit (the bound, not an estimate)."""
+    from scatterlab.inversion.least_squares import DEFAULT_BOUNDS
+
+    fitted = np.isfinite(n) & np.isfinite(k)
+    if not fitted.any():
+        return 0.0
+    on = np.zeros(n.shape, bool)
+    for v, name in ((n, "n"), (k, "kappa")):
+        lo, hi = DEFAULT_BOUNDS[name]
+        on |= np.isclose(v, lo, rtol=0, atol=1e-6) | np.isclose(v, hi, rtol=0, atol=1e-6)
+    return float(on[fitted].mean())
+
+
 def _pixel_stats(maps, masks, truths):
     out = {}
     for region, (tn, tk) in truths.items():
         m = masks[region]
         n, k = maps.n[m], maps.kappa[m]
         out[region] = {
+            "share_at_fit_bound": _at_bound(n, k),
             "n_mean": float(np.nanmean(n)),
             "n_std": float(np.nanstd(n)),
             "kappa_mean": float(np.nanmean(k)),

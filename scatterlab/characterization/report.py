@@ -189,8 +189,9 @@ def plate_figure(out, result, cfg) -> Path:
             fontsize=8,
         )
     fig.suptitle(
-        f"{result.plate.metal} plate: images at theta = {cfg.geometry_deg[mid]} deg; n, kappa from "
-        "all geometries; object coordinates",
+        f"{result.plate.metal} plate: images at theta = {cfg.geometry_deg[mid]} deg; "
+        + ("n, kappa from all geometries; " if "n" in rows else "")
+        + "object coordinates",
         fontsize=9,
     )
     path = Path(out) / f"{result.plate.metal}.png"
@@ -255,6 +256,14 @@ def _write_h5(path: Path, cfg, results) -> None:
     tmp.replace(path)
 
 
+def _interval_and_truth(e) -> str:
+    """``median [lo, hi], truth t`` with enough decimals that a miss does not print as a hit."""
+    from scatterlab.characterization.report_text import decimals_for
+
+    d = decimals_for(e["truth"], *e["ci68"])
+    return f"{e['median']:.{d}f} [{e['ci68'][0]:.{d}f}, {e['ci68'][1]:.{d}f}], truth {e['truth']:.{d}f}"
+
+
 def acceptance_checks(cfg, results) -> list:
     """The main job's acceptance numbers, checked against the truth: list of (check, value, passed).
 
@@ -291,8 +300,7 @@ def acceptance_checks(cfg, results) -> list:
                         (
                             f"{p.metal}: {region} posterior 68 % interval of {q} covers the truth "
                             "(no turbulence)",
-                            f"{e['median']:.3f} [{e['ci68'][0]:.3f}, {e['ci68'][1]:.3f}]"
-                            f", truth {e['truth']:.3f}",
+                            _interval_and_truth(e),
                             bool(e["covers68"]),
                         )
                     )

@@ -655,3 +655,24 @@ def test_a_bootstrap_on_a_reference_plate_re_simulates_that_plate_once():
     assert len(seen) == 2  # one pass of one replicate per geometry
     c1 = bias_corrected(regions[0], one)
     assert not one.measured and not c1.calibrated and np.all(c1.error > regions[0].error / 0.6)
+
+
+def test_report_prints_enough_decimals_to_show_a_miss():
+    # a 68 % interval [1.3904, 1.3915] misses a truth of 1.3900 by 4e-4: three decimals would print
+    # "[1.390, 1.392], truth 1.390" beside a FAIL
+    from scatterlab.characterization.report import _interval_and_truth
+    from scatterlab.characterization.report_text import decimals_for
+
+    assert decimals_for(1.39, 1.3904, 1.3915) == 4
+    assert decimals_for(1.39, 1.2, 1.5) == 3
+    text = _interval_and_truth({"median": 1.391, "ci68": [1.3904, 1.3915], "truth": 1.39})
+    assert text == "1.3910 [1.3904, 1.3915], truth 1.3900"
+
+
+def test_share_of_pixels_on_a_bound_of_the_fit():
+    from scatterlab.characterization.metrics import _at_bound
+
+    n = np.array([5.0, 1.44, 2.0, np.nan])
+    k = np.array([10.0, 25.0, 12.0, 3.0])
+    assert _at_bound(n, k) == 2 / 3  # n = 5 and kappa = 25 are the fit's bounds; NaN not fitted
+    assert _at_bound(np.array([np.nan]), np.array([np.nan])) == 0.0
