@@ -30,11 +30,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize
 
+from scatterlab._checks import as_finite
 from scatterlab.polarization.mueller import nearest_physical_mueller, rotate_mueller
 
 __all__ = ["ecm_calibrate", "ECMCalibration", "reference_parameters", "reference_mueller"]
 
 KINDS = ("polarizer", "retarder")
+_EPS = float(np.finfo(float).eps)  # the least tolerance scipy's Levenberg-Marquardt accepts
 
 
 def _check_matrix(B, name) -> np.ndarray:
@@ -375,7 +377,7 @@ def ecm_calibrate(
         polarizer at 0, 60 and 120 deg and a quarter-wave plate at 45 deg.
     fit_tolerance : float
         Relative convergence tolerance of the azimuth fit (Levenberg-Marquardt on the residuals
-        ``H_i w``; an accuracy knob, see the performance study).
+        ``H_i w``; an accuracy knob, see the performance study); finite, >= machine epsilon.
     warn_condition : float
         Warn when cond(W) or cond(A) exceeds this.
     grid : int
@@ -394,8 +396,8 @@ def ecm_calibrate(
     Raises
     ------
     ValueError
-        Wrong shapes, NaN intensities, a singular ``B0``, an unknown kind, or a degenerate reference
-        set (e.g. no retarder): W is then not determined.
+        Wrong shapes, NaN intensities, a singular ``B0``, an unknown kind, a ``fit_tolerance`` out
+        of range, or a degenerate reference set (e.g. no retarder): W is then not determined.
 
     Notes
     -----
@@ -407,6 +409,12 @@ def ecm_calibrate(
     mirror image of every azimuth (theta -> -theta) with ``diag(1, 1, -1, -1) W`` is a solution: the
     sense of rotation of the azimuths, i.e. the sign of S2, is fixed by the nominal azimuths.
     """
+    fit_tolerance = float(as_finite(fit_tolerance, "fit_tolerance"))
+    if not fit_tolerance >= _EPS:
+        raise ValueError(
+            f"fit_tolerance must be a finite number >= {_EPS:.3g} (machine epsilon), "
+            f"got {fit_tolerance!r}"
+        )
     B0, Bs, kinds, Cs, guesses = _parse_references(B0, references)
     params = [reference_parameters(C, kind) for C, kind in zip(Cs, kinds)]  # step 1: eigenvalues
     problem = _AzimuthProblem(params, Cs, guesses[0] if guesses[0] is not None else 0.0)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import as_angle, as_finite
+from scatterlab._checks import as_angle, as_finite, as_positive
 from scatterlab.pbrdf import Model
 
 __all__ = [
@@ -46,10 +46,21 @@ def normalised_elements(M) -> np.ndarray:
     Returns
     -------
     ndarray (..., 4)
-        ``(M01, M11, M22, M23) / M00`` (0-based; ``m12, m22, m33, m34`` in 1-based names).
+        ``(M01, M11, M22, M23) / M00`` (0-based; ``m12, m22, m33, m34`` in 1-based names); NaN,
+        without a warning, where ``M00 == 0`` (no light: the ratios are undefined).
+
+    Raises
+    ------
+    ValueError
+        If ``M`` is not of shape ``(..., 4, 4)``.
     """
     M = np.asarray(M, float)
-    return np.stack([M[..., j, k] / M[..., 0, 0] for j, k in ELEMENTS], -1)
+    if M.shape[-2:] != (4, 4):
+        raise ValueError(f"M must have shape (..., 4, 4), got {M.shape}")
+    m00 = M[..., 0, 0]
+    dark = m00 == 0
+    m00 = np.where(dark, 1.0, m00)
+    return np.stack([np.where(dark, np.nan, M[..., j, k] / m00) for j, k in ELEMENTS], -1)
 
 
 def model_elements(
@@ -71,7 +82,8 @@ def model_elements(
     Returns
     -------
     ndarray (N, 4)
-        ``(M01, M11, M22, M23) / M00`` (see :func:`normalised_elements`).
+        ``(M01, M11, M22, M23) / M00`` (see :func:`normalised_elements`); NaN where no light is
+        reflected (``eta = 1``, the index of the incidence medium: ``M00 = 0``).
     """
     F = Model(sigma, shadowing=shadowing, diffuse=diffuse).mueller(
         n - 1j * kappa, theta, theta, np.pi
@@ -163,12 +175,13 @@ def fit_mueller_elements(
     starts : sequence of (n, kappa)
         Starting points; the best final cost wins (metal/dielectric ambiguity).
     sigma0 : float
-        Starting roughness when ``sigma`` is not given.
+        Starting roughness when ``sigma`` is not given (finite, > 0).
     bounds : ((n_lo, n_hi), (k_lo, k_hi), (s_lo, s_hi))
     shadowing, diffuse : str
         Options of :class:`scatterlab.pbrdf.Model`.
     tolerance : float
-        How far normalised elements may lie outside [-1, 1] (noise) before the data are refused.
+        How far normalised elements may lie outside [-1, 1] (noise) before the data are refused
+        (finite, >= 0).
 
     Returns
     -------
@@ -181,14 +194,18 @@ def fit_mueller_elements(
     ValueError
         Angles outside [0, pi/2], ``measured`` of the wrong shape, non-finite, or outside [-1, 1]
         beyond ``tolerance``; ``std`` not > 0 or of the wrong shape; no ``sigma`` with
-        ``fit_sigma=False``; empty ``starts``.
+        ``fit_sigma=False``; empty ``starts``; ``sigma``, ``sigma0`` or ``tolerance`` out of range.
     """
+    tolerance = float(as_positive(tolerance, "tolerance", allow_zero=True))
     theta, y, w = _checked_data(theta, measured, std, tolerance)
     if len(starts) == 0:
         raise ValueError("starts must hold at least one (n, kappa) pair")
     if not fit_sigma and sigma is None:
         raise ValueError("sigma must be given when fit_sigma is False")
-    s0 = sigma0 if sigma is None else float(sigma)
+    if sigma is None:
+        s0 = float(as_positive(sigma0, "sigma0"))
+    else:
+        s0 = float(as_positive(sigma, "sigma"))
 
     def residual(p):  # weighted model - measured, p = (n, kappa[, sigma])
         s = p[2] if fit_sigma else s0

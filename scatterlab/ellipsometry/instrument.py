@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from scatterlab._checks import as_finite
+from scatterlab._checks import as_finite, as_positive
 from scatterlab.polarization import linear_polarizer, linear_retarder
 
 __all__ = [
@@ -239,7 +239,8 @@ def condition_number(X) -> float:
 
 @dataclass
 class Instrument:
-    """A Mueller ellipsometer with PSG matrix ``W`` and PSA matrix ``A`` (4x4 each).
+    """A Mueller ellipsometer with PSG matrix ``W`` and PSA matrix ``A`` (4x4 each, finite and
+    non-singular, else a ValueError naming it).
 
     ``measure(M, rng, noise=..., repeats=...)`` returns the mean intensity matrix over ``repeats``
     measurements and its standard deviation; detector noise is Gaussian with standard deviation
@@ -258,6 +259,11 @@ class Instrument:
             X = np.asarray(getattr(self, nm), float)
             if X.shape != (4, 4) or not np.all(np.isfinite(X)):
                 raise ValueError(f"{nm} must be a finite 4x4 matrix")
+            if np.linalg.matrix_rank(X) < 4:
+                raise ValueError(
+                    f"{nm} must be a non-singular 4x4 matrix (rank 4, four independent states), "
+                    f"got rank {np.linalg.matrix_rank(X)}: M = A^-1 B W^-1 is then not determined"
+                )
             setattr(self, nm, X)
 
     @property
@@ -297,9 +303,11 @@ class Instrument:
             Sample Mueller matrices.
         rng : anything ``numpy.random.default_rng`` accepts
         noise : float
-            Relative Gaussian noise (of each reading or of the largest, see ``relative_to``).
+            Relative Gaussian noise (of each reading or of the largest, see ``relative_to``;
+            finite, >= 0).
         noise_floor : float
-            Absolute noise standard deviation added to the relative one (same units as B).
+            Absolute noise standard deviation added to the relative one (same units as B; finite,
+            >= 0).
         repeats : int
             Measurements averaged (>= 1).
         relative_to : {"each", "max"}
@@ -310,8 +318,8 @@ class Instrument:
         """
         if repeats < 1:
             raise ValueError("repeats must be >= 1")
-        if noise < 0 or noise_floor < 0:
-            raise ValueError("noise and noise_floor must be >= 0")
+        noise = float(as_positive(noise, "noise", allow_zero=True))
+        noise_floor = float(as_positive(noise_floor, "noise_floor", allow_zero=True))
         if relative_to not in ("each", "max"):
             raise ValueError("relative_to must be 'each' or 'max'")
         rng = np.random.default_rng(rng)

@@ -64,8 +64,15 @@ def depolarization_index(M) -> np.ndarray:
     ndarray (...)
         1 for non-depolarizing, 0 for an ideal depolarizer; in [0, 1] for physical matrices, NaN
         where ``M00 <= 0``, not clipped (noise can push it past 1).
+
+    Raises
+    ------
+    ValueError
+        If ``M`` is not of shape ``(..., 4, 4)``.
     """
     M = np.asarray(M, float)
+    if M.shape[-2:] != (4, 4):
+        raise ValueError(f"M must have shape (..., 4, 4), got {M.shape}")
     m00 = M[..., 0, 0]
     total = np.sum(M * M, axis=(-2, -1)) - m00**2
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import as_angle
+from scatterlab._checks import as_angle, as_positive
 from scatterlab.inversion.design import inverse_information
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.inversion.options import DEFAULT_STARTS, FitOptions, resolve_options
@@ -70,7 +70,8 @@ def model_dolp(n, kappa, sigma, theta_i, theta_r, phi=np.pi, **model_kw) -> np.n
     Parameters
     ----------
     n, kappa, sigma : array_like (...)
-        Index ``n - 1j*kappa`` and rms facet slope (broadcast together).
+        Index ``n - 1j*kappa`` (finite, ``n >= 0``, ``kappa >= 0``; ``n`` below 1e-6, the bound
+        ``n = 0`` included, is evaluated at 1e-6) and rms facet slope (broadcast together).
     theta_i, theta_r : array (M,) [rad]
         Geometries.
     phi : float or array (M,) [rad], default pi (specular plane)
@@ -81,9 +82,14 @@ def model_dolp(n, kappa, sigma, theta_i, theta_r, phi=np.pi, **model_kw) -> np.n
     -------
     ndarray (..., M)
         DOLP in [0, 1] (dimensionless).
+
+    Raises
+    ------
+    ValueError
+        If ``n`` or ``kappa`` is negative or not finite.
     """
-    n = np.maximum(np.asarray(n, float), 1e-6)[..., None]
-    kappa = np.maximum(np.asarray(kappa, float), 0.0)[..., None]
+    n = np.maximum(as_positive(n, "n", allow_zero=True), 1e-6)[..., None]
+    kappa = as_positive(kappa, "kappa", allow_zero=True)[..., None]
     sigma = np.asarray(sigma, float)[..., None]
     return Model(sigma, **model_kw).dolp(n - 1j * kappa, theta_i, theta_r, phi)
 
@@ -235,7 +241,7 @@ def check_starts(starts):
     Parameters
     ----------
     starts : sequence of (n, kappa)
-        Starting points.
+        Starting points: finite, ``n >= 0`` and ``kappa >= 0`` (the domain of ``n - 1j*kappa``).
 
     Returns
     -------
@@ -249,6 +255,10 @@ def check_starts(starts):
     if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] != 2 or not np.all(np.isfinite(arr)):
         raise ValueError(
             f"starts must be a non-empty sequence of finite (n, kappa) pairs, got {starts!r}"
+        )
+    if np.any(arr < 0):
+        raise ValueError(
+            f"starts must have n >= 0 and kappa >= 0 in every (n, kappa) pair, got {starts!r}"
         )
     return arr
 
@@ -642,7 +652,7 @@ def fit_dolp_per_pixel(
         As in :class:`FitOptions`.
     starts : sequence of (n, kappa)
     sigma0 : float
-        Starting roughness.
+        Starting roughness (finite, > 0).
     **model_kw
         ``shadowing``, ``diffuse``, ``distribution`` of :class:`scatterlab.pbrdf.Model`.
 
@@ -653,6 +663,7 @@ def fit_dolp_per_pixel(
     """
     y, ti, tr, ph = prepare_data(dolp, theta_i, theta_r, phi)
     starts = check_starts(starts)
+    sigma0 = float(as_positive(sigma0, "sigma0"))
     fit_sigma = sigma is None
     P = 3 if fit_sigma else 2
     lo, hi = parameter_bounds(bounds, P)

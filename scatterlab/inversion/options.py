@@ -12,6 +12,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from scatterlab._checks import as_positive
+
 __all__ = ["MODEL_KEYS", "FitOptions", "resolve_options"]
 
 MODEL_KEYS = ("shadowing", "diffuse", "distribution")  # keywords passed to scatterlab.pbrdf.Model
@@ -30,11 +32,12 @@ class FitOptions:
     starts : non-empty sequence of (n, kappa)
         Starting points; every pixel runs from each and the lowest cost wins.
     sigma0 : float
-        Starting roughness (rms slope, dimensionless).
+        Starting roughness (rms slope, dimensionless, finite and > 0; clipped to the sigma
+        bounds).
     max_iter : int
         Levenberg-Marquardt iterations per start (>= 1).
     tol : float
-        Relative cost decrease that ends the iteration (> 0).
+        Relative cost decrease that ends the iteration (finite and > 0).
     """
 
     bounds: dict | None = None
@@ -44,14 +47,17 @@ class FitOptions:
     tol: float = 1e-12
 
     def validate(self) -> None:
-        """Raise a ValueError naming ``max_iter`` and ``tol`` when they are out of range."""
-        if not (
-            isinstance(self.max_iter, (int, np.integer)) and self.max_iter >= 1 and self.tol > 0
+        """Raise a ValueError naming ``sigma0``, ``max_iter`` or ``tol`` when out of range."""
+        if np.ndim(self.sigma0) != 0:
+            raise ValueError(f"sigma0 must be a single float > 0, got {self.sigma0!r}")
+        as_positive(self.sigma0, "sigma0")
+        if isinstance(self.max_iter, bool) or not (
+            isinstance(self.max_iter, (int, np.integer)) and self.max_iter >= 1
         ):
-            raise ValueError(
-                f"max_iter must be a positive integer and tol > 0, got {self.max_iter!r}, "
-                f"{self.tol!r}"
-            )
+            raise ValueError(f"max_iter must be an integer >= 1, got {self.max_iter!r}")
+        if np.ndim(self.tol) != 0:
+            raise ValueError(f"tol must be a single float > 0, got {self.tol!r}")
+        as_positive(self.tol, "tol")
 
 
 def resolve_options(kw: dict, groups: dict, extra_keys=MODEL_KEYS):

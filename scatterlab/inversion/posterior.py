@@ -736,11 +736,15 @@ def _problem_minima(
             delta_chi2=options.mode_delta_chi2,
             **problem.model_kw,
         )
-    messages.extend(
-        f"least squares: {w.message}"
-        for w in caught
-        if issubclass(w.category, IdentifiabilityWarning)
-    )
+    # the warnings come from every start's fit; they describe the result only if a kept minimum has
+    # an undetermined direction (infinite error), and one copy of each says it
+    if any(not np.all(np.isfinite(f.errors)) for f in minima):
+        said = dict.fromkeys(
+            f"least squares: {w.message}"
+            for w in caught
+            if issubclass(w.category, IdentifiabilityWarning)
+        )
+        messages.extend(said)
     if len(minima) > 1:
         messages.append(
             f"{len(minima)} least-squares minima within delta chi2 = {options.mode_delta_chi2}: "

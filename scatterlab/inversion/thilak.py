@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import ETA_MIN, as_angle
+from scatterlab._checks import ETA_MIN, as_angle, as_finite, as_positive
 from scatterlab.fresnel import smooth_dolp
 from scatterlab.inversion.design import inverse_information
 
@@ -134,12 +134,15 @@ def thilak_two_step(
     tol: float | None = None,
     max_nfev: int | None = None,
     theta_r_start=None,
+    margin: float = 0.5,
 ) -> ThilakFit:
     """Thilak et al.'s two-step method for each row of ``dop`` (K, M) measured at ``theta_i`` (M,).
 
     Parameters
     ----------
     dop : array (K, M) or (M,)
+        Measured DOP, finite and in ``[-margin, 1 + margin]`` (a DOP is in [0, 1]; the margin
+        admits additive noise, as in the Monte-Carlo trials of Tables 1-3).
     theta_i : array (M,) [rad]
     theta_r_nominal : float [rad] -- the known reflection angle of step 1 and the start of step 2.
     rng : numpy.random.Generator -- restarts.
@@ -165,12 +168,26 @@ def thilak_two_step(
     theta_r_start : float [rad], "random" or None
         Start of step 2: None for ``theta_r_nominal``; "random" draws it uniformly in
         (0, 90) deg with ``rng`` for every attempt.
+    margin : float
+        Allowed excursion of ``dop`` outside [0, 1] (finite, >= 0; 0 requires [0, 1]).
 
     Returns
     -------
     ThilakFit
+
+    Raises
+    ------
+    ValueError
+        If ``dop`` has a NaN, an infinite value or a value outside ``[-margin, 1 + margin]``.
     """
-    y = np.atleast_2d(np.asarray(dop, float))
+    margin = float(as_positive(margin, "margin", allow_zero=True))
+    y = np.atleast_2d(as_finite(dop, "dop"))
+    bad = (y < -margin) | (y > 1 + margin)
+    if np.any(bad):
+        raise ValueError(
+            f"dop must be in [0, 1] (within margin = {margin:g}); got {int(bad.sum())} value(s) "
+            f"outside, e.g. {y[bad][0]:.4g}"
+        )
     ti = as_angle(theta_i, "theta_i").ravel()
     tr0 = float(as_angle(theta_r_nominal, "theta_r_nominal"))
     if y.shape[-1] != ti.size:
@@ -243,7 +260,8 @@ def thilak_crlb(n, kappa, theta_r, theta_i, noise, *, theta_r_known: bool = Fals
     theta_r : float [rad]
     theta_i : array (M,) [rad]
     noise : float
-        DOP noise standard deviation (> 0).
+        DOP noise standard deviation (> 0). ``n``, ``kappa``, ``theta_r`` and ``noise`` are
+        scalars (an array is a ValueError): call once per truth.
     theta_r_known : bool
 
     Returns
@@ -251,6 +269,11 @@ def thilak_crlb(n, kappa, theta_r, theta_i, noise, *, theta_r_known: bool = Fals
     ndarray (3,) or (2,)
         Standard deviations of (n, kappa[, theta_r]) (theta_r in rad).
     """
+    for name, value in (("n", n), ("kappa", kappa), ("theta_r", theta_r), ("noise", noise)):
+        if np.ndim(value) != 0:
+            raise ValueError(
+                f"{name} must be a single float (one truth per call), got shape {np.shape(value)}"
+            )
     if not (np.isfinite(noise) and noise > 0):
         raise ValueError(f"noise must be a positive DOP standard deviation, got {noise}")
     if not (n > 0 and kappa > 0):

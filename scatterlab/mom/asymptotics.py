@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from scatterlab._checks import as_index, as_positive
 from scatterlab.mom.efie import Solution
 from scatterlab.mom.surfaces import gaussian_spectrum
 
@@ -50,11 +51,13 @@ def spm1_alpha(theta_i, theta_s, polarization: str, eta=None):
     theta_i, theta_s : float or array [rad] -- incidence and scattering angles (theta_s > 0
         forward).
     polarization : "s" or "p"
-    eta : complex, optional -- index of the lower medium; None is a perfect conductor.
+    eta : complex, optional -- index ``n - 1j*kappa`` of the lower medium (checked as in
+        :func:`~scatterlab.mom.solve`); None is a perfect conductor.
 
     Returns
     -------
-    ndarray complex -- alpha.
+    ndarray complex -- alpha. The square root ``q = sqrt(eta^2 - sin^2 theta)`` is the branch
+    ``A - jB`` with ``A, B >= 0`` (docs/conventions.md), continuous as kappa -> 0+.
     """
     ci, cs, si, ss = np.cos(theta_i), np.cos(theta_s), np.sin(theta_i), np.sin(theta_s)
     if polarization not in ("s", "p"):
@@ -63,11 +66,21 @@ def spm1_alpha(theta_i, theta_s, polarization: str, eta=None):
         return np.asarray(
             1.0 + 0 * ss if polarization == "s" else (si * ss - 1) / (ci * cs), complex
         )
-    e = complex(eta) ** 2
-    qi, qs = np.sqrt(e - si * si), np.sqrt(e - ss * ss)
+    e = complex(as_index(eta, "eta")) ** 2
+    qi, qs = _refraction_root(e - si * si), _refraction_root(e - ss * ss)
     if polarization == "s":
         return (e - 1) / ((ci + qi) * (cs + qs))
     return (e - 1) * (e * si * ss - qi * qs) / ((e * ci + qi) * (e * cs + qs))
+
+
+def _refraction_root(z):
+    """``sqrt(z)`` on the branch ``A - jB``, ``A, B >= 0`` (``Im z <= 0`` for a passive medium).
+
+    The principal root already is that branch, except on its cut, the negative real axis (kappa
+    = 0 and eta^2 < sin^2 theta), where it gives ``+jB``: the kappa -> 0+ limit is ``-jB``.
+    """
+    q = np.sqrt(np.asarray(z, complex))
+    return np.where(q.imag > 0, np.conj(q), q)
 
 
 def spm1_coefficient(theta_i, theta_s, k, spectrum, polarization: str = "s", eta=None):
@@ -76,15 +89,21 @@ def spm1_coefficient(theta_i, theta_s, k, spectrum, polarization: str = "s", eta
     Parameters
     ----------
     theta_i, theta_s : float or array [rad]
-    k : float [rad/m] -- wavenumber above the surface.
+    k : float [rad/m] -- wavenumber above the surface (finite, > 0).
     spectrum : callable K -> W(K) [m^3], or a tuple (sigma_h, corr_length) [m] of a Gaussian
         correlation (:func:`scatterlab.mom.surfaces.gaussian_spectrum`).
     polarization : "s" or "p"
-    eta : complex, optional -- None is a perfect conductor.
+    eta : complex, optional -- index ``n - 1j*kappa``, checked as in :func:`~scatterlab.mom.solve`;
+        None is a perfect conductor.
 
     Returns
     -------
     ndarray -- coefficient per radian of theta_s, per incident power.
+
+    Raises
+    ------
+    ValueError
+        If ``k`` is not finite and > 0, or ``eta`` is not a passive index (see ``solve``).
     """
     if isinstance(spectrum, tuple):
         sigma_h, ell = spectrum
@@ -92,6 +111,7 @@ def spm1_coefficient(theta_i, theta_s, k, spectrum, polarization: str = "s", eta
         def spectrum(q):
             return gaussian_spectrum(q, sigma_h, ell)
 
+    k = as_positive(k, "k")
     K = k * (np.sin(theta_s) - np.sin(theta_i))
     alpha = spm1_alpha(theta_i, theta_s, polarization, eta)
     return 4 * k**3 * np.cos(theta_i) * np.cos(theta_s) ** 2 * np.abs(alpha) ** 2 * spectrum(K)

@@ -28,6 +28,13 @@ import numpy as np
 __all__ = ["PlaneWave", "TaperedWave"]
 
 
+def _check_real(value, name: str) -> None:
+    """ValueError naming ``name`` unless ``value`` is one real number (not a string or bool)."""
+    kind = np.asarray(value).dtype.kind if np.ndim(value) == 0 else None
+    if kind not in ("i", "u", "f"):
+        raise ValueError(f"{name} must be a real number, got {value!r}")
+
+
 @dataclass(frozen=True)
 class PlaneWave:
     """Plane wave incident at ``theta`` [rad] from the vertical (|theta| < pi/2 for surfaces; any for bodies)."""
@@ -35,6 +42,7 @@ class PlaneWave:
     theta: float
 
     def __post_init__(self):
+        _check_real(self.theta, "theta")
         if not np.isfinite(self.theta) or abs(self.theta) > 2 * np.pi:
             raise ValueError(
                 f"theta must be a finite angle in [-2 pi, 2 pi] rad, got {self.theta!r}"
@@ -76,6 +84,8 @@ class TaperedWave:
     correction: bool = True
 
     def __post_init__(self):
+        for name in ("theta", "g", "x0"):
+            _check_real(getattr(self, name), name)
         if not -np.pi / 2 < self.theta < np.pi / 2:
             raise ValueError(
                 f"theta must be in (-pi/2, pi/2) rad (-90, 90 deg) for a tapered wave, got "

@@ -26,16 +26,22 @@ def rms_slope(sigma_h, corr_length):
     Parameters
     ----------
     sigma_h : array_like
-        rms height [m].
+        rms height [m] (>= 0).
     corr_length : array_like
-        Correlation length [m].
+        Correlation length [m] (> 0).
 
     Returns
     -------
     ndarray
         rms slope [dimensionless].
+
+    Raises
+    ------
+    ValueError
+        If ``sigma_h`` is not finite and >= 0 or ``corr_length`` not finite and > 0.
     """
-    return np.sqrt(2) * np.asarray(sigma_h, float) / np.asarray(corr_length, float)
+    sigma_h = as_positive(sigma_h, "sigma_h", allow_zero=True)
+    return np.sqrt(2) * sigma_h / as_positive(corr_length, "corr_length")
 
 
 def correlation_length_for_slope(sigma_h, slope):
@@ -45,16 +51,21 @@ def correlation_length_for_slope(sigma_h, slope):
     Parameters
     ----------
     sigma_h : array_like
-        rms height [m].
+        rms height [m] (> 0).
     slope : array_like
-        rms slope [dimensionless].
+        rms slope [dimensionless] (> 0).
 
     Returns
     -------
     ndarray
         Correlation length l [m].
+
+    Raises
+    ------
+    ValueError
+        If ``sigma_h`` or ``slope`` is not finite and > 0.
     """
-    return np.sqrt(2) * np.asarray(sigma_h, float) / np.asarray(slope, float)
+    return np.sqrt(2) * as_positive(sigma_h, "sigma_h") / as_positive(slope, "slope")
 
 
 def gaussian_spectrum(k, sigma_h, corr_length):

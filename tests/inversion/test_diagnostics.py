@@ -109,3 +109,19 @@ def test_inference_data_export_agrees_with_arviz_own_diagnostics():
         # thinning by tau / 2 keeps the ESS (tau of the kept draws shrinks by the same factor)
         theirs = float(az.ess(idata, var_names=[p], method="bulk")[p])
         assert 0.5 < theirs / ours[p]["ess"] < 2.0, (p, theirs, ours[p]["ess"])
+
+
+def test_messages_do_not_repeat_warnings_of_discarded_least_squares_starts():
+    # README example: paint at seven specular geometries, sigma known. Some least-squares starts end
+    # where kappa is undetermined; the kept minimum determines it, so the posterior's messages must
+    # not say "the data do not determine kappa" (four times) beside a finite kappa interval
+    th = np.radians([30, 35, 40, 45, 50, 55, 60])
+    rng = np.random.default_rng(1)
+    y = model_dolp(1.39, 0.34, 0.3, th, th) + 0.005 * rng.standard_normal(7)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        post = sample_posterior(y, th, th, 0.005, 1, sigma=0.3, n_steps=60)
+    ls = [m for m in post.messages if m.startswith("least squares")]
+    assert ls == []
+    lo, hi = post.interval(0.68)[..., 1]  # kappa: finite and about the noise's width
+    assert np.isfinite(lo) and np.isfinite(hi) and 0 < hi - lo < 0.2
