@@ -259,10 +259,11 @@ class Instrument:
             X = np.asarray(getattr(self, nm), float)
             if X.shape != (4, 4) or not np.all(np.isfinite(X)):
                 raise ValueError(f"{nm} must be a finite 4x4 matrix")
-            if np.linalg.matrix_rank(X) < 4:
+            rank = np.linalg.matrix_rank(X)
+            if rank < 4:
                 raise ValueError(
                     f"{nm} must be a non-singular 4x4 matrix (rank 4, four independent states), "
-                    f"got rank {np.linalg.matrix_rank(X)}: M = A^-1 B W^-1 is then not determined"
+                    f"got rank {rank}: M = A^-1 B W^-1 is then not determined"
                 )
             setattr(self, nm, X)
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from scatterlab._checks import as_index, as_positive
+from scatterlab.fresnel import refraction_term
 from scatterlab.mom.efie import Solution
 from scatterlab.mom.surfaces import gaussian_spectrum
 
@@ -66,21 +67,13 @@ def spm1_alpha(theta_i, theta_s, polarization: str, eta=None):
         return np.asarray(
             1.0 + 0 * ss if polarization == "s" else (si * ss - 1) / (ci * cs), complex
         )
-    e = complex(as_index(eta, "eta")) ** 2
-    qi, qs = _refraction_root(e - si * si), _refraction_root(e - ss * ss)
+    eta = complex(as_index(eta, "eta"))
+    e = eta**2
+    # the package's stable u = sqrt(eta^2 - sin^2) = A - jB (sin^2 is even in the angle)
+    qi, qs = refraction_term(eta, np.abs(theta_i)), refraction_term(eta, np.abs(theta_s))
     if polarization == "s":
         return (e - 1) / ((ci + qi) * (cs + qs))
     return (e - 1) * (e * si * ss - qi * qs) / ((e * ci + qi) * (e * cs + qs))
-
-
-def _refraction_root(z):
-    """``sqrt(z)`` on the branch ``A - jB``, ``A, B >= 0`` (``Im z <= 0`` for a passive medium).
-
-    The principal root already is that branch, except on its cut, the negative real axis (kappa
-    = 0 and eta^2 < sin^2 theta), where it gives ``+jB``: the kappa -> 0+ limit is ``-jB``.
-    """
-    q = np.sqrt(np.asarray(z, complex))
-    return np.where(q.imag > 0, np.conj(q), q)
 
 
 def spm1_coefficient(theta_i, theta_s, k, spectrum, polarization: str = "s", eta=None):
