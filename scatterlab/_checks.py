@@ -17,6 +17,7 @@ __all__ = [
     "as_positive",
     "as_finite",
     "broadcast",
+    "check_starts",
 ]
 
 
@@ -158,3 +159,34 @@ def broadcast(**arrays) -> list[np.ndarray]:
     except ValueError as exc:
         shapes = ", ".join(f"{k}{np.shape(v)}" for k, v in arrays.items())
         raise ValueError(f"shapes do not broadcast: {shapes}") from exc
+
+
+def check_starts(starts, name: str = "starts"):
+    """``starts`` as an array (S, 2) of (n, kappa) starting points; empty or malformed is a
+    ValueError.
+
+    Parameters
+    ----------
+    starts : sequence of (n, kappa)
+        Starting points: finite, ``n >= 0`` and ``kappa >= 0`` (the domain of ``n - 1j*kappa``).
+    name : str
+        The argument's name in the messages.
+
+    Returns
+    -------
+    ndarray (S, 2)
+        The starting points as floats.
+    """
+    try:
+        arr = np.asarray(starts, float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a sequence of (n, kappa) pairs, got {starts!r}") from exc
+    if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] != 2 or not np.all(np.isfinite(arr)):
+        raise ValueError(
+            f"{name} must be a non-empty sequence of finite (n, kappa) pairs, got {starts!r}"
+        )
+    if np.any(arr < 0):
+        raise ValueError(
+            f"{name} must have n >= 0 and kappa >= 0 in every (n, kappa) pair, got {starts!r}"
+        )
+    return arr

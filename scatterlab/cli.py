@@ -196,6 +196,14 @@ def _fit_mueller(args) -> int:
             time_convention=args.time_convention,
         )
         if args.wavelength_um is not None:
+            if not data.wavelengths.size or not np.any(
+                np.isclose(data.wavelengths, args.wavelength_um * 1e-6, rtol=1e-6, atol=0.0)
+            ):
+                have = ", ".join(f"{w * 1e6:g}" for w in data.wavelengths)
+                raise ValueError(
+                    f"--wavelength-um {args.wavelength_um:g} is not in {args.file} "
+                    f"(its wavelengths [um]: {have})"
+                )
             data = data.select(args.wavelength_um * 1e-6)
         elif data.wavelengths.size > 1:
             have = ", ".join(f"{w * 1e6:g}" for w in data.wavelengths)
@@ -311,7 +319,11 @@ def main(argv=None) -> int:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sub = parser.add_subparsers(
-        dest="command", required=True, metavar="COMMAND", help=argparse.SUPPRESS
+        dest="command",
+        required=True,
+        metavar="COMMAND",
+        help=argparse.SUPPRESS,
+        prog="scatterlab",  # subcommand usage reads "scatterlab study ...", not the top usage line
     )
     st = sub.add_parser(
         "study", help="list or run the studies that reproduce the reference figures"

@@ -128,6 +128,21 @@ def test_fit_mueller_bad_input_exit_codes(tmp_path, capsys):
     write_mueller_brdf(tmp_path / "two.csv", two)
     assert main(["fit-mueller", str(tmp_path / "two.csv"), "--out", str(tmp_path / "o")]) == 2
     assert "--wavelength-um" in capsys.readouterr().err
+    # a wavelength not in the file: the message stays in the unit the user typed
+    argv = ["fit-mueller", str(tmp_path / "two.csv"), "--out", str(tmp_path / "o")]
+    assert main([*argv, "--wavelength-um", "1.6"]) == 2
+    err = capsys.readouterr().err
+    assert "--wavelength-um 1.6 is not in" in err and "[um]: 1.064, 1.55" in err
+
+
+def test_subcommand_usage_and_python_dash_m():
+    import subprocess
+    import sys
+
+    run = subprocess.run(
+        [sys.executable, "-m", "scatterlab", "study", "--help"], capture_output=True, text=True
+    )
+    assert run.returncode == 0 and run.stdout.startswith("usage: scatterlab study [-h]"), run
 
 
 def test_workers_below_one_are_refused(tmp_path, capsys):

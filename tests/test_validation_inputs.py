@@ -2,6 +2,7 @@
 ValueError naming it (never a silently wrong answer or a numpy/scipy warning)."""
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -28,6 +29,8 @@ from scatterlab.inversion import (
 from scatterlab.inversion.thilak import thilak_dop
 from scatterlab.mom.asymptotics import spm1_alpha, spm1_coefficient
 from scatterlab.polarization import linear_polarizer, linear_retarder
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "data" / "examples"
 
 TI = TR = np.deg2rad([10, 30, 45, 60, 75, 85])
 TH = np.radians([10, 20, 30, 40, 50, 60, 70])
@@ -112,6 +115,23 @@ def test_thilak_two_step_margin():
         thilak_two_step(y, ti, tr, np.random.default_rng(0), margin=-1.0)
 
 
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"start": (np.nan, 1.0)}, "start must be a non-empty sequence of finite"),
+        ({"start": (-1.0, 1.0)}, "start must have n >= 0"),
+        ({"start": "ab"}, "start must be"),
+        ({"max_restarts": -1}, "max_restarts must be >= 0"),
+        ({"max_restarts": 2.5}, "max_restarts must be an integer"),
+    ],
+)
+def test_thilak_two_step_refuses_bad_start_and_restarts(kw, match):
+    ti = np.radians(np.linspace(35, 80, 10))
+    y = thilak_dop(0.314, 3.544, (ti + np.radians(60.0)) / 2)
+    with pytest.raises(ValueError, match=match):
+        thilak_two_step(y, ti, np.radians(60.0), np.random.default_rng(0), **kw)
+
+
 @pytest.mark.parametrize("k", range(4))
 def test_thilak_crlb_refuses_arrays_by_name(k):
     args = [1.5, 0.3, np.radians(60), TI, 1e-3]
@@ -157,6 +177,29 @@ def test_fit_mueller_elements_refuses_bad_options(kw, name):
     y = model_elements(TH, 1.5, 0.1, 0.2)
     with pytest.raises(ValueError, match=name):
         fit_mueller_elements(TH, y, **kw)
+
+
+@pytest.mark.parametrize(
+    "starts, match",
+    [
+        ([], "non-empty"),
+        ([(np.nan, 1.0)], "finite"),
+        ([(1.5, -0.1)], "n >= 0 and kappa >= 0"),
+        ([(1.5,)], "pairs"),
+    ],
+)
+def test_fit_mueller_elements_and_fit_pbrdf_refuse_bad_starts(starts, match):
+    from scatterlab.ellipsometry import fit_pbrdf
+    from scatterlab.io import read_mueller_brdf
+
+    y = model_elements(TH, 1.5, 0.1, 0.2)
+    with pytest.raises(ValueError, match=f"starts must .*{match}"):
+        fit_mueller_elements(TH, y, starts=starts)
+    if not EXAMPLES.is_dir():
+        pytest.skip("data/examples not present (installed package)")
+    data = read_mueller_brdf(EXAMPLES / "mueller_brdf_scatmech_style.csv")
+    with pytest.raises(ValueError, match=f"starts must .*{match}"):
+        fit_pbrdf(data, starts=starts, posterior_steps=0)
 
 
 def test_instrument_refuses_bad_noise_and_singular_matrices():

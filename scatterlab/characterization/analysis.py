@@ -399,6 +399,21 @@ def _bias_corrected(region, draws):
     return replace(out, error=np.hypot(out.error, draws.std(axis=0, ddof=1)))
 
 
+def _classification_vs_labels(ds, layout) -> dict | None:
+    """The regions (``layout``, 1 = metal) scored against a simulation's true labels (label 0 the
+    dielectric, every other label a metal) over the interior the posteriors use
+    (:func:`~scatterlab.deconvolution.classification_errors`), or None without labels on this grid.
+    The images are registered to the restored 50-degree image, so a residual shift counts as error."""
+    from scatterlab.deconvolution import classification_errors
+
+    t = ds.truth
+    if t is None or not ds.simulated or np.shape(t.labels) != np.shape(layout):
+        return None
+    sel = interior(layout.shape, max(2, layout.shape[0] // 16))
+    metal = tuple(range(1, len(t.names)))
+    return classification_errors(layout, t.labels, metal_classes=metal, mask=sel)
+
+
 def _truths(ds) -> dict:
     """Region -> (n, kappa) of the simulated truth (label 0 the dielectric, label 1 the metal), or {}."""
     t = ds.truth
@@ -458,9 +473,12 @@ def _write(folder, ds, settings, images, layout, maps, estimates, seconds, missi
         "metal_share": float(layout.mean()),
         "regions_left_out": missing,
     }
+    scored = _classification_vs_labels(ds, layout)
+    if scored is not None:
+        summary["classification_vs_labels"] = scored
     write_json(folder.path / "summary.json", summary, overwrite=True)
     _maps_figure(folder.path, images, layout, maps, ds, save_png)
-    text = _markdown(ds, settings, posts, seconds, missing)
+    text = _markdown(ds, settings, posts, seconds, missing, scored)
     report = write_text(folder.report, text, overwrite=True)
     import shutil
 
@@ -520,7 +538,7 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
     save_png(fig, Path(path) / "maps.png")
 
 
-def _markdown(ds, settings, posts, seconds, missing) -> str:
+def _markdown(ds, settings, posts, seconds, missing, scored=None) -> str:
     lines = [
         f"# Analysis: {ds.title or 'polarimetric dataset'}",
         "",
@@ -574,6 +592,13 @@ def _markdown(ds, settings, posts, seconds, missing) -> str:
         lines.append(row)
         notes += [f"- **{region}:** {w}" for w in p["warnings"]]
     notes += [f"- **Region left out**, {m}" for m in missing]
+    if scored is not None:
+        notes.append(
+            f"- **Regions against the true labels** (interior pixels): total error "
+            f"{scored['total_error']:.3f} ({scored['false_metal_rate']:.3f} of the dielectric taken "
+            f"for metal, {scored['false_dielectric_rate']:.3f} of the metal for dielectric; metal "
+            f"share {scored['metal_share']:.2f}). A residual registration shift counts as error."
+        )
     lines += (
         [""]
         + notes

@@ -266,6 +266,24 @@ def pixel_maps(stack, thetas, sigma) -> PixelMaps:
     return PixelMaps(fit.n, fit.kappa, fit.errors)
 
 
+def contraction_text(c: float) -> str:
+    """A posterior contraction as the report prints it: two decimals, or ``"none"`` below 0.005.
+
+    A chain spread as wide as the prior has an estimated contraction scattered around 0, sometimes
+    slightly negative (-0.02); printed as a number, that reads as a defect of the sampler.
+
+    Parameters
+    ----------
+    c : float
+        ``1 - var_post / var_prior`` (:meth:`scatterlab.inversion.Posterior.contraction`).
+
+    Returns
+    -------
+    str
+    """
+    return f"{c:.2f}" if c >= 0.005 else "none"
+
+
 def _summarise(name, post, data: RegionData) -> RegionEstimate:
     s = post.summary()
     params = {}
@@ -301,7 +319,7 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
     if weak:
         notes.append(
             f"the data determine {' and '.join(weak)} only weakly (posterior contraction "
-            + ", ".join(f"{contraction[p]:.2f}" for p in weak)
+            + ", ".join(contraction_text(contraction[p]) for p in weak)
             + "; 1 = fixed by the data, 0 = the prior's spread): the marginal interval follows the "
             "prior along a ridge of equal DOLP, and for a fixed material it does not cover at its "
             "nominal rate. The joint (n, kappa) likelihood-ratio region is the calibrated statement"

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import as_angle, as_finite, as_positive
+from scatterlab._checks import as_angle, as_finite, as_positive, check_starts
 from scatterlab.pbrdf import Model
 
 __all__ = [
@@ -194,12 +194,12 @@ def fit_mueller_elements(
     ValueError
         Angles outside [0, pi/2], ``measured`` of the wrong shape, non-finite, or outside [-1, 1]
         beyond ``tolerance``; ``std`` not > 0 or of the wrong shape; no ``sigma`` with
-        ``fit_sigma=False``; empty ``starts``; ``sigma``, ``sigma0`` or ``tolerance`` out of range.
+        ``fit_sigma=False``; empty, non-finite or negative ``starts``; ``sigma``, ``sigma0`` or
+        ``tolerance`` out of range.
     """
     tolerance = float(as_positive(tolerance, "tolerance", allow_zero=True))
     theta, y, w = _checked_data(theta, measured, std, tolerance)
-    if len(starts) == 0:
-        raise ValueError("starts must hold at least one (n, kappa) pair")
+    starts = check_starts(starts)
     if not fit_sigma and sigma is None:
         raise ValueError("sigma must be given when fit_sigma is False")
     if sigma is None:

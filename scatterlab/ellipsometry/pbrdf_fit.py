@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from scatterlab._checks import check_starts
 from scatterlab.ellipsometry.fit import IndexFitMixin, least_squares_from_starts
 from scatterlab.pbrdf import Model
 
@@ -308,13 +309,12 @@ def fit_pbrdf(
     Raises
     ------
     ValueError
-        Several wavelengths and none chosen, a wavelength not in the data, empty ``starts``, bad
+        Several wavelengths and none chosen, a wavelength not in the data, empty, non-finite or
+        negative ``starts``, bad
         bounds, non-positive standard deviations of fitted elements, fewer data than parameters.
     """
     data = _select(data, wavelength)
-    starts = [tuple(map(float, s)) for s in starts]
-    if not starts or any(len(s) != 2 for s in starts):
-        raise ValueError("starts must hold at least one (n, kappa) pair")
+    starts = [tuple(s) for s in check_starts(starts).tolist()]
     lo, hi = np.array(bounds, float).T
     if lo.shape != (3,) or np.any(~(lo < hi)) or lo[2] < 1e-4 or hi[2] > 5:
         raise ValueError(

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import as_angle, as_positive
+from scatterlab._checks import as_angle, as_positive, check_starts
 from scatterlab.inversion.design import inverse_information
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.inversion.options import DEFAULT_STARTS, FitOptions, resolve_options
@@ -232,35 +232,6 @@ def parameter_bounds(bounds, P: int):
     lo = np.array([b["n"][0], b["kappa"][0], b["sigma"][0]][:P], float)
     hi = np.array([b["n"][1], b["kappa"][1], b["sigma"][1]][:P], float)
     return lo, hi
-
-
-def check_starts(starts):
-    """``starts`` as an array (S, 2) of (n, kappa) starting points; empty or malformed is a
-    ValueError.
-
-    Parameters
-    ----------
-    starts : sequence of (n, kappa)
-        Starting points: finite, ``n >= 0`` and ``kappa >= 0`` (the domain of ``n - 1j*kappa``).
-
-    Returns
-    -------
-    ndarray (S, 2)
-        The starting points as floats.
-    """
-    try:
-        arr = np.asarray(starts, float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"starts must be a sequence of (n, kappa) pairs, got {starts!r}") from exc
-    if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] != 2 or not np.all(np.isfinite(arr)):
-        raise ValueError(
-            f"starts must be a non-empty sequence of finite (n, kappa) pairs, got {starts!r}"
-        )
-    if np.any(arr < 0):
-        raise ValueError(
-            f"starts must have n >= 0 and kappa >= 0 in every (n, kappa) pair, got {starts!r}"
-        )
-    return arr
 
 
 def check_noise(noise, name: str = "noise"):

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import ETA_MIN, as_angle, as_finite, as_positive
+from scatterlab._checks import ETA_MIN, as_angle, as_finite, as_positive, check_starts
 from scatterlab.fresnel import smooth_dolp
 from scatterlab.inversion.design import inverse_information
 
@@ -178,9 +178,15 @@ def thilak_two_step(
     Raises
     ------
     ValueError
-        If ``dop`` has a NaN, an infinite value or a value outside ``[-margin, 1 + margin]``.
+        If ``dop`` has a NaN, an infinite value or a value outside ``[-margin, 1 + margin]``;
+        ``start`` not a finite (n, kappa) pair with both >= 0; ``max_restarts`` not an integer >= 0.
     """
     margin = float(as_positive(margin, "margin", allow_zero=True))
+    start = check_starts([start], "start")[0]
+    if isinstance(max_restarts, bool) or not isinstance(max_restarts, (int, np.integer)):
+        raise ValueError(f"max_restarts must be an integer >= 0, got {max_restarts!r}")
+    if max_restarts < 0:
+        raise ValueError(f"max_restarts must be >= 0, got {max_restarts}")
     y = np.atleast_2d(as_finite(dop, "dop"))
     bad = (y < -margin) | (y > 1 + margin)
     if np.any(bad):

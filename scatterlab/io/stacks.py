@@ -91,10 +91,18 @@ def _write_npz(path, flat: dict, overwrite: bool) -> Path:
 
 
 def _read_npz(path) -> dict:
+    import zipfile
+
+    # an NPZ is a zip archive: anything else would reach numpy's loader, whose message for arbitrary bytes
+    # is about pickles ("allow_pickle"), which says nothing to a user with a damaged file
+    if not zipfile.is_zipfile(path):
+        raise ValueError(
+            f"{path}: not an NPZ dataset (not a zip archive: damaged or another format)"
+        )
     try:
         with np.load(path, allow_pickle=False) as z:
             flat = {k: z[k] for k in z.files}
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
         raise ValueError(f"{path}: not a readable NPZ dataset ({exc})") from None
     return {k: (v.item() if v.ndim == 0 else v) for k, v in flat.items()}
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from scatterlab.characterization.analysis import AnalyzeSettings, analyze
+from scatterlab.characterization.pipeline import interior
 from scatterlab.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "data" / "examples"
@@ -34,6 +35,9 @@ def test_analyze_runs_on_the_example_datasets(tmp_path, name):
         assert p["n"]["ci95"][0] <= p["n"]["median"] <= p["n"]["ci95"][1]
         assert p["n"]["truth"] == pytest.approx(1.39 if region == "dielectric" else 1.44)
     assert 0 < s["metal_share"] < 1
+    # simulated data: the regions are scored against the true labels, in the summary and the report
+    c = s["classification_vs_labels"]
+    assert 0 <= c["total_error"] <= 1 and "Regions against the true labels" in text
 
 
 def test_analyze_cli_reads_a_tiff_stack_with_its_sidecar_and_names_wrong_files(tmp_path, capsys):
@@ -107,8 +111,24 @@ def test_analyze_with_the_known_diffraction_psf_recovers_the_paint(tmp_path):
         tmp_path,
         settings=AnalyzeSettings(psf="diffraction", iterations=100, posterior_steps=600),
     )
-    p = json.loads((tmp_path / "summary.json").read_text())["posteriors"]["dielectric"]
+    s = json.loads((tmp_path / "summary.json").read_text())
+    p = s["posteriors"]["dielectric"]
     assert p["n"]["covers95"] and p["kappa"]["covers95"], p
+    # the regions against the true labels: no metal lost, and every pixel wrongly called metal within
+    # one diffraction width (lambda/D = 2 pixels) of the true metal, where the image mixes the two
+    import h5py
+    from scipy import ndimage
+
+    with h5py.File(tmp_path / "results.h5") as f5:
+        layout = f5["layout"][()] > 0
+    metal = labels > 0
+    sel = interior(labels.shape, max(2, labels.shape[0] // 16))
+    assert not np.any(~layout & metal & sel)
+    assert ndimage.distance_transform_edt(~metal)[layout & ~metal & sel].max() <= 2.0
+    c = s["classification_vs_labels"]
+    assert c["false_dielectric"] == 0 and c["total_error"] == pytest.approx(
+        np.mean((layout != metal)[sel])
+    )
     assert abs(p["n"]["median"] - 1.39) < 0.05 and abs(p["kappa"]["median"] - 0.34) < 0.1, p
 
 

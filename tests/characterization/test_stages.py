@@ -676,3 +676,16 @@ def test_share_of_pixels_on_a_bound_of_the_fit():
     k = np.array([10.0, 25.0, 12.0, 3.0])
     assert _at_bound(n, k) == 2 / 3  # n = 5 and kappa = 25 are the fit's bounds; NaN not fitted
     assert _at_bound(np.array([np.nan]), np.array([np.nan])) == 0.0
+
+
+def test_a_contraction_at_or_below_zero_is_printed_as_none():
+    """Sampling noise puts the contraction of a prior-wide chain slightly below 0; the report says none."""
+    from scatterlab.characterization.estimation import contraction_text
+
+    assert [contraction_text(c) for c in (-0.02, 0.0, 0.004, 0.05, 0.71)] == [
+        "none",
+        "none",
+        "none",
+        "0.05",
+        "0.71",
+    ]

@@ -159,6 +159,21 @@ def test_bad_dataset_files_name_the_problem(tmp_path, changes, message):
     assert "bad.npz" in str(err.value)
 
 
+@pytest.mark.parametrize("content", [b"", b"PK\x03\x04truncated", bytes(range(256)) * 4])
+def test_a_damaged_npz_is_named_as_damaged(tmp_path, content):
+    """Bytes that are not a zip archive (empty, a truncated zip, noise) get a message about the file, not
+    numpy's about pickles; a zip cut short is caught too."""
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(content)
+    with pytest.raises(ValueError, match="bad.npz: not an NPZ dataset"):
+        read_dataset(bad)
+    good = write_dataset(tmp_path / "d.npz", small()).read_bytes()
+    cut = tmp_path / "cut.npz"
+    cut.write_bytes(good[: len(good) // 2])
+    with pytest.raises(ValueError, match="cut.npz: not"):
+        read_dataset(cut)
+
+
 def test_bad_files_and_kinds(tmp_path):
     for name in ("scene.toml.csv", "x.npy", "x.json"):
         with pytest.raises(ValueError, match="expected a dataset"):
