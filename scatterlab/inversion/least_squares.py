@@ -25,6 +25,7 @@ Default bounds follow the reference (n in [0, 5], kappa in [0, 25]); sigma in [0
 
 from __future__ import annotations
 
+import itertools
 import warnings
 from dataclasses import dataclass
 
@@ -527,11 +528,13 @@ def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, options: F
     P = lo.size
     best_p = best_cost = best_done = None
     total_iter = 0
-    for n0, k0 in starts:
+    # sigma fitted: every (n, kappa) start from each starting roughness (FitOptions.sigma_starts)
+    sigmas = [None] if sigma0 is None else list(dict.fromkeys((sigma0, *options.sigma_starts)))
+    for (n0, k0), s0 in itertools.product(starts, sigmas):
         p = np.empty((valid.size, P))
         p[:, 0], p[:, 1] = n0, k0
-        if sigma0 is not None:
-            p[:, 2] = sigma0
+        if s0 is not None:
+            p[:, 2] = s0
         p = np.clip(p, lo, hi)
         p, cost, done, it = _levenberg_marquardt(
             forward, y0, mask, p, lo, hi, valid, options.max_iter, options.tol
