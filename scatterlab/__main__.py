@@ -4,4 +4,5 @@ import sys
 
 from scatterlab.cli import main
 
-sys.exit(main())
+if __name__ == "__main__":  # importing the module (doctest collection, docs) must not run the CLI
+    sys.exit(main())
