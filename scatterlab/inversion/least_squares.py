@@ -523,14 +523,20 @@ def _warn_undetermined(valid, identifiable):
     )
 
 
+# costs below this (half the sum of squared, possibly whitened, residuals) are exact fits that differ
+# by rounding: a DOLP residual of 1e-16 whitened by a noise of 1e-3 gives 1e-26 per geometry
+EXACT_FIT_COST = 1e-20
+
+
 def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, options: FitOptions):
     """Run LM from every start for the N flattened pixels; keep the lowest cost per pixel."""
     P = lo.size
     best_p = best_cost = best_done = None
     total_iter = 0
-    # sigma fitted: every (n, kappa) start from each starting roughness (FitOptions.sigma_starts)
+    # sigma fitted: every (n, kappa) start from each starting roughness (FitOptions.sigma_starts),
+    # sigma0 first
     sigmas = [None] if sigma0 is None else list(dict.fromkeys((sigma0, *options.sigma_starts)))
-    for (n0, k0), s0 in itertools.product(starts, sigmas):
+    for s0, (n0, k0) in itertools.product(sigmas, starts):
         p = np.empty((valid.size, P))
         p[:, 0], p[:, 1] = n0, k0
         if s0 is not None:
@@ -544,6 +550,11 @@ def _best_of_starts(forward, y0, mask, valid, starts, sigma0, lo, hi, options: F
             best_p, best_cost, best_done = p, cost, done
         else:
             take = cost < best_cost
+            if s0 is not None and s0 != sigma0:
+                # a further roughness start replaces sigma0's fit only where it fits clearly better:
+                # between two exact fits (costs at rounding level) sigma0's stays, so a truth on a
+                # bound (glass, kappa = 0) is not traded for a point beside it
+                take = cost < best_cost * (1 - 1e-9) - EXACT_FIT_COST
             best_p = np.where(take[..., None], p, best_p)
             best_done = np.where(take, done, best_done)
             best_cost = np.where(take, cost, best_cost)
