@@ -196,15 +196,14 @@ def _fit_mueller(args) -> int:
             time_convention=args.time_convention,
         )
         if args.wavelength_um is not None:
-            if not data.wavelengths.size or not np.any(
-                np.isclose(data.wavelengths, args.wavelength_um * 1e-6, rtol=1e-6, atol=0.0)
-            ):
+            try:
+                data = data.select(args.wavelength_um * 1e-6)
+            except ValueError:  # no row at that wavelength: say so in the option's unit
                 have = ", ".join(f"{w * 1e6:g}" for w in data.wavelengths)
                 raise ValueError(
                     f"--wavelength-um {args.wavelength_um:g} is not in {args.file} "
                     f"(its wavelengths [um]: {have})"
-                )
-            data = data.select(args.wavelength_um * 1e-6)
+                ) from None
         elif data.wavelengths.size > 1:
             have = ", ".join(f"{w * 1e6:g}" for w in data.wavelengths)
             raise ValueError(
