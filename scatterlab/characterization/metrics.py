@@ -4,6 +4,7 @@ Per image key (``no_turbulence`` -- the restored reference --, ``no_turbulence_u
 ``D_r0_<x>_degraded``, ``D_r0_<x>_corrected``):
 
 * DOLP RMSE and flux-normalised S0 relative RMSE against the object and against the reference;
+* for a blind restoration, the PSF estimate's L1 distance from the true PSF (``psf_l1_error``);
 * classification at the geometry nearest 50 deg (Table 4) against the reference classification (the
   priors' DOLP thresholds applied to the restored no-turbulence image) and against the true labels;
 * per-pixel n and kappa (Table 5: mean and standard deviation over each eroded region, median |eta error|);
@@ -66,6 +67,21 @@ def _image_errors(obs, case, kind, sel):
         scaled = s0 * target[:, sel].sum() / max(float(s0[:, sel].sum()), 1e-300)
         out[f"s0_relative_rmse_{name}"] = rmse(scaled, target, sel3) / float(target[:, sel].mean())
     return out
+
+
+def _psf_errors(obs, case):
+    """How far each geometry's PSF estimate is from the PSF the data were blurred with.
+
+    L1 after the best integer shift (:func:`~scatterlab.deconvolution.psf_distance`; 0 = the true PSF,
+    2 = disjoint), the first frame's estimate when there are several.
+    """
+    from scatterlab.deconvolution import psf_distance
+
+    d = []
+    for o in obs:
+        h = np.asarray(o.restorations[(case, "corrected")].psf)
+        d.append(psf_distance(h[0] if h.ndim == 3 else h, o.acquisitions[case].psf_true)[0])
+    return {"psf_l1_error": float(np.mean(d)), "psf_l1_error_per_geometry": d}
 
 
 def _classification(result, case, kind, mid, sel, priors):
@@ -195,6 +211,8 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
     reference = None  # the plate the no-turbulence image shows (first in image_kinds)
     for key, case, kind in image_kinds(cfg):
         cs = _image_errors(obs, case, kind, sel)
+        if kind == "corrected":
+            cs.update(_psf_errors(obs, case))
         if priors:
             cs.update(_classification(result, case, kind, mid, sel, priors))
         est = {}

@@ -1,7 +1,8 @@
 """Polarimetric blind deconvolution, DOLP priors and material classification (Ch. V-VII, Eqs. 185-198).
 
 * :func:`blind_deconvolve` -- EM (LeMaster-Cain / Schulz) for S0, DOLP, AOP and the PSFs;
-* :mod:`psf_update` -- the Sec. 5.3.2 start PSF and the Gerchberg-Saxton pupil projection (Eqs. 146-150);
+* :mod:`psf_update` -- the Sec. 5.3.2 start PSF, the Gerchberg-Saxton pupil projection (Eqs. 146-150), and
+  :func:`psf_distance`, an estimate's L1 distance from the true PSF;
 * :mod:`priors` -- super-Gaussian DOLP priors (Eq. 195), the MAP DOLP update (Eq. 196), adaptive priors;
 * classification: several priors given to :func:`blind_deconvolve` label each pixel by the prior whose
   update maximizes the objective; :func:`classification_errors` scores a label map like Table 4;
@@ -36,7 +37,12 @@ from scatterlab.deconvolution.priors import (
     dolp_update_companion,
     map_objective,
 )
-from scatterlab.deconvolution.psf_update import gerchberg_saxton, initial_psf, resample_psf
+from scatterlab.deconvolution.psf_update import (
+    gerchberg_saxton,
+    initial_psf,
+    psf_distance,
+    resample_psf,
+)
 
 __all__ = [
     "blind_deconvolve",
@@ -66,4 +72,5 @@ __all__ = [
     "object_grid",
     "gerchberg_saxton",
     "resample_psf",
+    "psf_distance",
 ]

@@ -3,7 +3,8 @@ r"""PSF models and updates for the blind deconvolution (Schulz; Eqs. 146-150; Se
 * :func:`initial_psf` -- the text's start: the PSF of one random Kolmogorov phase screen, piston and tilt removed;
 * :func:`gerchberg_saxton` -- projection of a (non-parametric) PSF estimate onto the PSFs an aperture can form,
   :math:`|\mathcal F\{A e^{j\phi}\}|^2`, by alternating the image-plane modulus and the pupil amplitude;
-* :func:`resample_psf` -- a centred PSF cropped or zero-padded onto another grid, unit sum.
+* :func:`resample_psf` -- a centred PSF cropped or zero-padded onto another grid, unit sum;
+* :func:`psf_distance` -- how far a PSF estimate is from the true PSF: L1 after the best integer shift.
 
 PSFs are ``(H, W)`` arrays, centred at ``(H // 2, W // 2)``, non-negative with unit sum.
 """
@@ -12,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["initial_psf", "gerchberg_saxton", "resample_psf"]
+__all__ = ["initial_psf", "gerchberg_saxton", "psf_distance", "resample_psf"]
 
 
 def initial_psf(pupil, shape, d_over_r0: float = 10.0, rng=None) -> np.ndarray:
@@ -75,6 +76,45 @@ def resample_psf(h, shape) -> np.ndarray:
         (Hs - ch) // 2 : (Hs - ch) // 2 + ch, (Ws - cw) // 2 : (Ws - cw) // 2 + cw
     ]
     return out / out.sum()
+
+
+def psf_distance(h, truth, reach: int = 8) -> tuple:
+    """The L1 distance of a PSF estimate from the true PSF, at the integer shift that brings them nearest.
+
+    A blind estimate is found up to a translation (the object moves the other way), so the shift is
+    minimised over. Both PSFs are put on the truth's grid (:func:`resample_psf`: centred, unit sum), so
+    the distance runs from 0 (the same PSF) to 2 (disjoint supports).
+
+    Parameters
+    ----------
+    h : array_like, shape (Hh, Wh)
+        Centred PSF estimate (non-negative, positive sum).
+    truth : array_like, shape (H, W)
+        Centred true PSF (non-negative, positive sum).
+    reach : int
+        Largest shift tried along each axis [pixels] (>= 0).
+
+    Returns
+    -------
+    distance : float
+        ``sum |roll(h, shift) - truth|`` at the best shift, in [0, 2].
+    shift : tuple of int
+        That shift ``(dy, dx)`` [pixels] applied to ``h``.
+    """
+    truth = np.asarray(truth, float)
+    h = np.asarray(h, float)
+    for name, a in (("h", h), ("truth", truth)):
+        if a.ndim != 2 or not np.all(np.isfinite(a)) or np.any(a < 0) or not a.sum() > 0:
+            raise ValueError(f"{name} must be a finite non-negative 2-D PSF with a positive sum")
+    if isinstance(reach, bool) or not isinstance(reach, (int, np.integer)) or reach < 0:
+        raise ValueError(f"reach must be an integer >= 0, got {reach!r}")
+    truth = truth / truth.sum()
+    h = resample_psf(h, truth.shape)
+    return min(
+        (float(np.abs(np.roll(h, (a, b), (0, 1)) - truth).sum()), (a, b))
+        for a in range(-reach, reach + 1)
+        for b in range(-reach, reach + 1)
+    )
 
 
 def gerchberg_saxton(h_target, pupil, phase, shape, steps):

@@ -23,7 +23,7 @@ the quick mode (48 x 48, F = 3, R = 0 and 8) runs in the tests.
 import time
 
 import numpy as np
-from scatterlab.studies.performance.perf_layout_psf import best_shift, painted_plate_object
+from scatterlab.studies.performance.perf_layout_psf import painted_plate_object
 from scipy.ndimage import binary_erosion
 
 from scatterlab.deconvolution import (
@@ -31,6 +31,7 @@ from scatterlab.deconvolution import (
     initial_psf,
     layout_psf,
     object_grid,
+    psf_distance,
     resample_psf,
 )
 from scatterlab.imaging import (
@@ -142,7 +143,7 @@ def run(ctx):
                     found = list(res.psf) if F > 1 else [res.psf]
                     paint_dolp = float(res.dolp[np.argmin(res.s0)])
                 secs = time.perf_counter() - t0
-                dist = [best_shift(h, t)[0] for h, t in zip(found, truths)]
+                dist = [psf_distance(h, t)[0] for h, t in zip(found, truths)]
                 fixed = blind_deconvolve(
                     counts,
                     angles,

@@ -42,6 +42,7 @@ from scatterlab.deconvolution import (
     initial_psf,
     layout_psf,
     object_grid,
+    psf_distance,
     resample_psf,
 )
 from scatterlab.imaging import (
@@ -70,15 +71,6 @@ def painted_plate_object(n):
     s0 = np.where(lab == 1, 10.0, 1.0)
     P = np.where(lab == 1, 0.02, 0.8)
     return np.stack([s0, P * s0, np.zeros_like(s0)], axis=-1), P
-
-
-def best_shift(h, truth, reach=8):
-    """The integer shift (dy, dx) that brings ``h`` nearest ``truth`` in L1, and that distance."""
-    return min(
-        (float(np.abs(np.roll(h, (a, b), (0, 1)) - truth).sum()), (a, b))
-        for a in range(-reach, reach + 1)
-        for b in range(-reach, reach + 1)
-    )
 
 
 def run(ctx):
@@ -124,7 +116,7 @@ def run(ctx):
                 )
                 found.append((R, h_R, time.perf_counter() - t0))
             for label, h_R, secs in found:
-                dist, shift = best_shift(h_R, truth)
+                dist, shift = psf_distance(h_R, truth)
                 res = blind_deconvolve(
                     counts,
                     ANGLES_0_45_90_135,

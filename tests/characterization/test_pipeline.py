@@ -50,6 +50,9 @@ def test_pipeline_writes_results_and_report(tmp_path):
         "D_r0_7.9_degraded",
         "D_r0_7.9_corrected",
     }
+    d = s["plates"]["aluminium"]["D_r0_7.9_corrected"]["psf_l1_error_per_geometry"]
+    assert len(d) == 2 and all(0 < x <= 2 for x in d)  # a blind estimate: never the truth exactly
+    assert "PSF L1" in text
     post = s["plates"]["aluminium"]["no_turbulence"]["posterior_paint"]
     for q in ("n", "kappa"):  # the truth beside every estimate, and whether each interval covers it
         e = post[q]
@@ -197,3 +200,34 @@ def test_cli_quick_run_infers_the_noise_the_re_simulations_did_not_measure(tmp_p
     bad = tmp_path / "bad.toml"
     bad.write_text("image_size = 7\n")
     assert main(["characterize", str(bad), "--out", str(tmp_path / "b")]) == 2
+
+
+def test_failure_notes_give_the_cause_and_the_chance_of_interval_misses():
+    """A 68 % statement misses with probability 0.32: one miss among three has probability
+    1 - 0.68**3 of happening at least once (closed form); a failure after deconvolution names the PSF
+    estimate's distance from the truth, unless the run was given the true PSF."""
+    from types import SimpleNamespace
+
+    from scatterlab.characterization import Ideal
+    from scatterlab.characterization.report_text import _failure_notes
+
+    res = SimpleNamespace(
+        plate=SimpleNamespace(metal="steel"),
+        metrics={"no_turbulence": {}, "D_r0_7.9_corrected": {"psf_l1_error": 1.234}},
+    )
+    checks = [
+        ("steel: paint posterior 68 % interval of n covers the truth (no turbulence)", "", True),
+        (
+            "steel: paint posterior 68 % interval of kappa covers the truth (no turbulence)",
+            "",
+            False,
+        ),
+        ("steel: paint truth inside the joint 68 % (n, kappa) region (no turbulence)", "", True),
+        ("steel, D/r0 = 7.9: corrected vs no-turbulence classification error <= 0.06", "", False),
+    ]
+    text = "\n".join(_failure_notes([res], checks, Ideal()))
+    assert "1 of 3 68 % statements" in text
+    assert f"probability {1 - 0.68**3:.2f}" in text and "expects 1.0 misses" in text
+    assert "steel D/r0 = 7.9: 1.23" in text
+    assert "1.23" not in "\n".join(_failure_notes([res], checks, Ideal(psf=True)))
+    assert _failure_notes([res], [(c, v, True) for c, v, _ in checks], Ideal()) == []
