@@ -417,7 +417,10 @@ def _sample(prob, x, cov, s2, bounds, steps, walkers, rng) -> dict:
     p0 = np.clip(p0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
     sampler = emcee.EnsembleSampler(walkers, 3, log_prob, vectorize=True)
     sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
-    sampler.run_mcmc(p0, int(steps), progress=False)
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1):  # small matrices: BLAS threads only contend (run_ensembles)
+        sampler.run_mcmc(p0, int(steps), progress=False)
     samples = sampler.get_chain(discard=int(steps) // 2, flat=True)
     return {
         "samples": samples,

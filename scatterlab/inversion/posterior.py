@@ -891,7 +891,15 @@ def run_ensembles(
         between-ensemble R-hat is below 1.01, or ``max_steps`` is reached.
     """
     import emcee
+    from threadpoolctl import threadpool_limits
 
+    # the moves' linear algebra is on (walkers x D) matrices: BLAS threads only contend (measured with
+    # sample_posterior on a busy 2-core machine: 89 s with OpenBLAS's threads, 8.4 s with one)
+    with threadpool_limits(limits=1):
+        return _run_ensembles(emcee, log_prob, ndim, starts, options, seeds, backends)
+
+
+def _run_ensembles(emcee, log_prob, ndim, starts, options, seeds, backends) -> list:
     E = len(seeds)
     backends = backends if backends is not None else [None] * E
     moves = _emcee_moves(options.moves)

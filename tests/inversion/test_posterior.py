@@ -248,3 +248,21 @@ def test_credible_intervals_are_calibrated_over_200_trials():
         rate = inside.mean(0)
         se = np.sqrt(nominal * (1 - nominal) / len(posts))
         assert np.all(np.abs(rate - nominal) < 3 * se), (level, rate)
+
+
+def test_the_sampler_runs_with_one_blas_thread():
+    """The moves' linear algebra is on (walkers x D) matrices: BLAS threads would only contend with each
+    other and with a process pool (on a busy 2-core machine ten times slower)."""
+    from threadpoolctl import threadpool_info
+
+    from scatterlab.inversion.posterior import SamplerOptions, run_ensembles
+
+    seen = []
+
+    def log_prob(P):
+        seen.extend(p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas")
+        return -0.5 * np.sum(P**2, axis=1)
+
+    opts = SamplerOptions(n_walkers=8, n_steps=3)
+    run_ensembles(log_prob, 2, [np.random.default_rng(0).normal(size=(8, 2))], opts, [1])
+    assert seen and set(seen) == {1}
