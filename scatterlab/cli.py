@@ -19,8 +19,20 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 
 __all__ = ["main"]
+
+
+def _message(exc) -> str:
+    """One line for the user: the file that is missing, or the input error a parallel task met."""
+    from scatterlab.runtime.executors import TaskError
+
+    if isinstance(exc, FileNotFoundError) and exc.filename:
+        return f"no such file: {exc.filename}"
+    if isinstance(exc, TaskError) and isinstance(exc.__cause__, ValueError):
+        return str(exc.__cause__)
+    return str(exc)
 
 
 def _executor(args):
@@ -53,7 +65,7 @@ def _study(args) -> int:
     try:
         ex = _executor(args)
     except ValueError as exc:
-        print(f"scatterlab: {exc}", file=sys.stderr)
+        print(f"scatterlab: {_message(exc)}", file=sys.stderr)
         return 2
     try:
         if args.id == "all":
@@ -71,7 +83,7 @@ def _study(args) -> int:
         print(f"report: {report}")
         return 0
     except (ValueError, FileExistsError) as exc:
-        print(f"scatterlab: {exc}", file=sys.stderr)
+        print(f"scatterlab: {_message(exc)}", file=sys.stderr)
         return 2
     finally:
         ex.close()
@@ -118,14 +130,18 @@ def _load_scene_file(path):
 
 def _report(args, job) -> int:
     """Run ``job(executor) -> report path`` with the executor of ``args``; print the report or the error."""
+    from scatterlab.runtime.executors import TaskError
+
     try:
         ex = _executor(args)
         try:
             report = job(ex)
         finally:
             ex.close()
-    except (ValueError, FileExistsError, FileNotFoundError) as exc:
-        print(f"scatterlab: {exc}", file=sys.stderr)
+    except (ValueError, FileExistsError, FileNotFoundError, TaskError) as exc:
+        if isinstance(exc, TaskError) and not isinstance(exc.__cause__, ValueError):
+            raise  # a defect, not an input error: keep the traceback
+        print(f"scatterlab: {_message(exc)}", file=sys.stderr)
         return 2
     print(f"report: {report}")
     return 0
@@ -137,7 +153,7 @@ def _characterize(args) -> int:
     try:
         cfg = _load_scene_file(args.scene) if args.scene else default_scene()
     except (ValueError, FileNotFoundError) as exc:
-        print(f"scatterlab: {exc}", file=sys.stderr)
+        print(f"scatterlab: {_message(exc)}", file=sys.stderr)
         return 2
     if args.quick:  # a small, fast version of the same scene (tests, smoke runs)
         cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = (
@@ -228,7 +244,7 @@ def _fit_mueller(args) -> int:
             overwrite=args.force,
         )
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
-        print(f"scatterlab: {exc}", file=sys.stderr)
+        print(f"scatterlab: {_message(exc)}", file=sys.stderr)
         return 2
     e = fit.errors
     quality = (
@@ -240,9 +256,15 @@ def _fit_mueller(args) -> int:
         f"n = {fit.n:.5g} +- {e[0]:.2g}, kappa = {fit.kappa:.5g} +- {e[1]:.2g}, "
         f"sigma = {fit.sigma:.4g} +- {e[2]:.2g} ({quality})"
     )
+    if not fit.success:
+        print(
+            "scatterlab: warning: the fit did not converge: these numbers are not an estimate (report.md says "
+            "why; check the angle unit, --angle-unit, and the time convention)",
+            file=sys.stderr,
+        )
     if fit.circular_flip_ratio < 0.25:
         print(
-            f"warning: the data fit {1 / fit.circular_flip_ratio:.3g} times better with their circular "
+            f"scatterlab: warning: the data fit {1 / fit.circular_flip_ratio:.3g} times better with their circular "
             "elements sign-flipped: the file is probably in the other time convention "
             "(--time-convention)",
             file=sys.stderr,
@@ -415,15 +437,19 @@ def main(argv=None) -> int:
     an.add_argument("--workers", type=int, default=None, help="local worker processes")
     an.add_argument("--scheduler", default=None, help="Dask scheduler address")
     args = parser.parse_args(argv)
-    if args.command == "analyze":
-        return _analyze(args)
-    if args.command == "study":
-        return _study(args)
-    if args.command == "characterize":
-        return _characterize(args)
-    if args.command == "fit-mueller":
-        return _fit_mueller(args)
-    return 2  # pragma: no cover
+    commands = {
+        "analyze": _analyze,
+        "study": _study,
+        "characterize": _characterize,
+        "fit-mueller": _fit_mueller,
+    }
+    with warnings.catch_warnings():  # a warning is a line for the user, not a source listing
+        warnings.showwarning = _show_warning
+        return commands[args.command](args)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"scatterlab: warning: {message}", file=sys.stderr if file is None else file)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -116,7 +116,7 @@ def test_fit_mueller_bad_input_exit_codes(tmp_path, capsys):
 
     path = _scatmech_style_file(tmp_path / "p.csv")
     assert main(["fit-mueller", str(tmp_path / "missing.csv"), "--out", str(tmp_path / "o")]) == 2
-    assert "missing.csv" in capsys.readouterr().err
+    assert "no such file: " in capsys.readouterr().err  # one line, not an OS error number
     data = read_mueller_brdf(path, time_convention="exp(-iwt)")
     two = MuellerBRDF(
         list(data.wavelength) + [1.064e-6],
@@ -151,3 +151,27 @@ def test_workers_below_one_are_refused(tmp_path, capsys):
     argv = ["characterize", "--quick", "--out", str(tmp_path / "c"), "--workers", "-1"]
     assert main(argv) == 2
     assert "--workers" in capsys.readouterr().err
+
+
+def test_an_input_error_inside_a_parallel_task_is_one_line(tmp_path, capsys):
+    """A ValueError met inside a task of the executor is the user's input, not a defect: one line and
+    exit code 2, as outside it. Anything else keeps its traceback."""
+    import pytest
+
+    from scatterlab.cli import _report
+    from scatterlab.runtime.executors import TaskError
+
+    class Args:
+        workers, scheduler = 1, None
+
+    def job(ex):
+        return ex.map(lambda t: (_ for _ in ()).throw(ValueError(f"bad input {t}")), [3])
+
+    assert _report(Args, job) == 2
+    assert capsys.readouterr().err.strip() == "scatterlab: bad input 3"
+
+    def bug(ex):
+        return ex.map(lambda t: 1 / 0, [0])
+
+    with pytest.raises(TaskError):
+        _report(Args, bug)

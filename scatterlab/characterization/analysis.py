@@ -262,7 +262,11 @@ def analyze(
     ds = dataset if hasattr(dataset, "counts") else read_dataset(dataset)
     if len(ds.theta) < 2:
         raise ValueError(f"the dataset has {len(ds.theta)} geometry; n and kappa need at least two")
-    K = ds.counts.shape[1]
+    K, H, W = ds.counts.shape[1:]
+    if (
+        min(H, W) < 8
+    ):  # the pupil grid is half the image, and a PSF needs at least 4 samples across it
+        raise ValueError(f"the images are {H} x {W} pixels; deconvolution needs at least 8 x 8")
     if K % settings.frames or K // settings.frames < 3:
         raise ValueError(
             f"frames = {settings.frames} must divide the dataset's {K} channels into frames of at least "

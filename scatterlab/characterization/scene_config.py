@@ -185,6 +185,12 @@ def _check_ranges(cfg: SceneConfig) -> None:
         )
     if not cfg.geometry_deg or not all(math.isfinite(g) and 0 < g < 89 for g in cfg.geometry_deg):
         raise ValueError(f"geometry_deg must list angles in (0, 89) deg, got {cfg.geometry_deg}")
+    # pi / 2: the largest a polar angle in radians can be
+    if all(g < math.pi / 2 for g in cfg.geometry_deg):
+        raise ValueError(
+            f"geometry_deg {cfg.geometry_deg} are all below {math.pi / 2:.4f} deg, where the DOLP is "
+            "below 1e-3 and determines nothing: radians given as degrees?"
+        )
     if not all(math.isfinite(x) and 0 < x <= 100 for x in cfg.d_over_r0):
         raise ValueError(f"d_over_r0 entries must be in (0, 100], got {cfg.d_over_r0}")
     _finite(cfg, "wavelength_um", 0, 1e4, lo_open=True)

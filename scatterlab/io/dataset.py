@@ -284,6 +284,22 @@ def _scalar(flat, key, where, required=True):
     return v
 
 
+def _checked_counts(counts, where):
+    """Not empty, and light at every geometry."""
+    if counts.size == 0:
+        raise ValueError(
+            f"{where}: 'counts' is empty: shape (G, K, H, W) = {counts.shape}, each must be >= 1"
+        )
+    G = counts.shape[0]
+    dark = [g for g in range(G) if not np.any(counts[g] > 0)]
+    if dark:
+        raise ValueError(
+            f"{where}: 'counts' hold no photons (every count <= 0) at geometr"
+            f"{'y' if len(dark) == 1 else 'ies'} {dark}: nothing to measure there"
+        )
+    return counts
+
+
 def _channels(flat, where):
     """``(counts (G, K, H, W), angles [rad], notes)`` from channel images or DoFP raw frames."""
     if "raw" in flat and "counts" in flat:
@@ -300,11 +316,11 @@ def _channels(flat, where):
             where=where,
         )
         return (
-            counts,
+            _checked_counts(counts, where),
             angles,
             [f"DoFP raw frames {raw.shape[1:]} demosaiced by superpixel into 4 channels"],
         )
-    counts = _array(flat, "counts", where, 4)
+    counts = _checked_counts(_array(flat, "counts", where, 4), where)
     deg = _array(flat, "polarizer_deg", where, 1)
     if deg.size != counts.shape[1]:
         raise ValueError(
@@ -314,6 +330,13 @@ def _channels(flat, where):
         raise ValueError(
             f"{where}: 'polarizer_deg' {deg.tolist()} needs at least three different orientations "
             f"(mod 180 deg) to measure linear polarization"
+        )
+    orient = np.sort(np.mod(deg, 180.0))
+    spread = 180.0 - np.max(np.diff(np.r_[orient, orient[0] + 180.0]))  # the arc the channels cover
+    if spread < 10.0:
+        raise ValueError(
+            f"{where}: 'polarizer_deg' {deg.tolist()} span only {spread:.3g} deg of orientation: the "
+            "channels cannot tell S1 from S2 (radians given as degrees?)"
         )
     return counts, np.radians(deg), []
 
@@ -374,6 +397,11 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
         raise ValueError(f"{where}: 'theta_deg' has {theta_deg.size} angles for {G} geometries")
     if np.any(theta_deg <= 0) or np.any(theta_deg >= 90):
         raise ValueError(f"{where}: 'theta_deg' must be in (0, 90) deg, got {theta_deg.tolist()}")
+    if np.all(theta_deg < np.pi / 2):  # the largest a polar angle in radians can be
+        raise ValueError(
+            f"{where}: 'theta_deg' {theta_deg.tolist()} are all below {np.pi / 2:.4f} deg, where "
+            "the DOLP is below 1e-3 and determines nothing: radians given as degrees?"
+        )
     wavelength = _scalar(flat, "wavelength_um", where) * 1e-6
     if not 0.01 <= wavelength * 1e6 <= 100:
         raise ValueError(

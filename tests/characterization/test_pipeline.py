@@ -87,6 +87,9 @@ def test_scene_files_are_validated(tmp_path):
     p.write_text("geometry_deg = [95]\n")
     with pytest.raises(ValueError, match="geometry_deg"):
         load_scene(p)
+    p.write_text("geometry_deg = [0.52, 0.79, 1.05]\n")  # radians typed as degrees
+    with pytest.raises(ValueError, match="geometry_deg .* radians given as degrees"):
+        load_scene(p)
     p.write_text('priors = "ch9"\n')
     with pytest.raises(ValueError, match="priors"):
         load_scene(p)

@@ -172,6 +172,21 @@ def test_units_and_normalised_only(tmp_path):
     np.testing.assert_allclose(wrong.wavelength, data.wavelength * 1e3)  # stated and overridable
 
 
+def test_radians_read_as_degrees_are_pointed_out(tmp_path):
+    """A file in radians without a stated unit, read as degrees: every polar angle is then below
+    pi / 2 "degrees", which no goniometric measurement is -- a warning names the option."""
+    path = write_mueller_brdf(tmp_path / "r.csv", model_data(normalised=True), angle_unit="rad")
+    lines = [x for x in path.read_text().splitlines() if "angles in rad" not in x]
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.warns(UserWarning, match="radians read as degrees.*angle_unit='rad'"):
+        read_mueller_brdf(path)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # stated correctly: no warning
+        read_mueller_brdf(path, angle_unit="rad")
+
+
 def test_other_header_names_and_columns_mapping(tmp_path):
     M = Model(0.3).mueller(ETA, np.radians(20), np.radians(40), np.radians(150))
     names = ["Wavelength [nm]", "AOI", "az_in", "theta_s", "phi_s"] + [
