@@ -555,8 +555,8 @@ class SpecularDHR:
     Eq. 174.
 
     Beckmann slopes read the shipped table of their shadowing (a 1-D resampling per scalar sigma);
-    another distribution is tabulated once, as a cubic spline over 129 Chebyshev-clustered angles
-    of :func:`dhr_slope_quadrature`.
+    another distribution is tabulated once, as a shape-preserving cubic (PCHIP) over 129
+    Chebyshev-clustered angles of :func:`dhr_slope_quadrature`.
 
     Parameters
     ----------
@@ -609,15 +609,21 @@ def _cosine_average_beckmann(shadowing: str, sigma: float) -> float:
 
 
 def _spline_dhr(distribution, strategy):
-    """rho(theta) of a non-Beckmann distribution: cubic spline of rho / weight over 129 angles."""
+    """rho(theta) of a non-Beckmann distribution: shape-preserving cubic (PCHIP) of rho * weight over
+    129 angles. A plain cubic spline overshot between the nodes where rho * cos climbs steeply at grazing
+    (heavy-tailed slopes without shadowing: rho -1.8e5 at 85 deg, hence a diffuse term 1.8e5 times
+    too large); PCHIP keeps the non-negative node values non-negative, with the same accuracy elsewhere
+    (relative error to the quadrature 6e-3 up to 85 deg for HyperCauchy(0.3, 1.05), 1e-5 to 4e-4 for
+    smoother distributions)."""
     nodes = np.pi / 4 * (1 - np.cos(np.linspace(0, np.pi, 129)))
     weight = (lambda t: np.ones_like(t)) if strategy.conserves_energy else np.cos
     vals = dhr_slope_quadrature(nodes, distribution, strategy)
-    spline = interpolate.CubicSpline(nodes, vals * weight(nodes))
+    spline = interpolate.PchipInterpolator(nodes, vals * weight(nodes))
 
     def rho(theta):
         theta = np.asarray(theta, float)
-        return spline(theta) / weight(theta)
+        with np.errstate(divide="ignore"):  # exactly 90 deg without shadowing: rho diverges
+            return np.maximum(spline(theta) / weight(theta), 0.0)
 
     return rho
 
