@@ -279,3 +279,15 @@ def test_incident_waves_refuse_strings_by_name():
     with pytest.raises(ValueError, match="theta must be a real number"):
         mom.PlaneWave("0.3")
     assert mom.TaperedWave(np.float64(0.3), 10).g == 10
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-177, 1e-160, 1.0, 1e160, 1e300])
+def test_depolarization_index_is_the_same_at_any_scale(scale):
+    """diag(1, a, a, a) has P_Delta = a (closed form) whatever its scale: a smooth surface far off
+    specular has M00 ~ 1e-177, whose squares underflowed to 'an ideal depolarizer'."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert depolarization_index(scale * np.diag([1.0, 0.5, 0.5, 0.5])) == pytest.approx(0.5)
+        assert depolarization_index(scale * np.eye(4)) == pytest.approx(1.0)

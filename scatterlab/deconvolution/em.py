@@ -429,6 +429,7 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
         raise ValueError(f"prior_weight must be finite and >= 0, got {weight!r}")
     if radius is not None and not (np.isfinite(radius) and radius >= 1):
         raise ValueError(f"psf_radius must be >= 1 pixel, got {radius!r}")
+    _check_start_and_stop(opts)
     if psf0 is not None:
         p0 = np.asarray(psf0, float)
         if not np.all(np.isfinite(p0)) or np.any(p0 < 0) or not np.all(p0.sum(axis=(-2, -1)) > 0):
@@ -443,6 +444,30 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
             "(estimate_aop=False)"
         )
     return d, th
+
+
+def _check_start_and_stop(opts: EMOptions) -> None:
+    """The start object, the fixed AOP and the stopping rule: each a ValueError naming it."""
+    s0, dolp, aop = opts.start.s0, opts.start.dolp, opts.polarization.aop
+    if s0 is not None:
+        a = np.asarray(s0, float)
+        if not (np.all(np.isfinite(a) & (a >= 0)) and np.any(a > 0)):
+            raise ValueError(
+                "s0_start must be finite and >= 0 counts with some light (the EM's updates are "
+                "multiplicative: a pixel that starts at 0 stays 0)"
+            )
+    if dolp is not None:
+        p = np.asarray(dolp, float)
+        if not np.all((p >= -1) & (p <= 1)):
+            raise ValueError("dolp_start must be finite and in [-1, 1] (a signed DOLP)")
+    if aop is not None and not np.all(np.isfinite(np.asarray(aop, float))):
+        raise ValueError("aop must be finite [rad]")
+    its = opts.stop.iterations
+    if isinstance(its, bool) or not isinstance(its, (int, np.integer)) or its < 0:
+        raise ValueError(f"iterations must be an integer >= 0, got {its!r}")
+    tol = opts.stop.tol
+    if tol is not None and not (np.ndim(tol) == 0 and np.isfinite(tol) and tol >= 0):
+        raise ValueError(f"tol must be None or a single finite float >= 0, got {tol!r}")
 
 
 def _valid_pixels(d, window: WindowOptions, notes):

@@ -67,6 +67,11 @@ def resample_psf(h, shape) -> np.ndarray:
     -------
     ndarray, shape (H, W)
         The cropped or padded PSF, normalised to unit sum.
+
+    Raises
+    ------
+    ValueError
+        No light is left after the crop.
     """
     out = np.zeros(shape)
     Hs, Ws = h.shape
@@ -75,7 +80,12 @@ def resample_psf(h, shape) -> np.ndarray:
     out[(H - ch) // 2 : (H - ch) // 2 + ch, (W - cw) // 2 : (W - cw) // 2 + cw] = h[
         (Hs - ch) // 2 : (Hs - ch) // 2 + ch, (Ws - cw) // 2 : (Ws - cw) // 2 + cw
     ]
-    return out / out.sum()
+    total = out.sum()
+    if not total > 0:
+        raise ValueError(
+            f"h has no light inside the central {H} x {W} pixels it is cropped to (shape {h.shape})"
+        )
+    return out / total
 
 
 def psf_distance(h, truth, reach: int = 8) -> tuple:
@@ -109,7 +119,10 @@ def psf_distance(h, truth, reach: int = 8) -> tuple:
     if isinstance(reach, bool) or not isinstance(reach, (int, np.integer)) or reach < 0:
         raise ValueError(f"reach must be an integer >= 0, got {reach!r}")
     truth = truth / truth.sum()
-    h = resample_psf(h, truth.shape)
+    try:
+        h = resample_psf(h, truth.shape)
+    except ValueError:  # all of the estimate's light lies outside the truth's grid: disjoint
+        return 2.0, (0, 0)
     return min(
         (float(np.abs(np.roll(h, (a, b), (0, 1)) - truth).sum()), (a, b))
         for a in range(-reach, reach + 1)

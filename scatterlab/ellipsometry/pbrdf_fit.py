@@ -75,13 +75,11 @@ def depolarization_index(M) -> np.ndarray:
     if M.shape[-2:] != (4, 4):
         raise ValueError(f"M must have shape (..., 4, 4), got {M.shape}")
     m00 = M[..., 0, 0]
-    total = np.sum(M * M, axis=(-2, -1)) - m00**2
+    # divided by M00 first: squares of a matrix of 1e-177 (a smooth surface far off specular) underflow
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(
-            m00 > 0,
-            np.sqrt(np.maximum(total, 0)) / (np.sqrt(3) * np.where(m00 > 0, m00, 1)),
-            np.nan,
-        )
+        N = M / np.where(m00 > 0, m00, 1.0)[..., None, None]
+    total = np.sum(N * N, axis=(-2, -1)) - 1.0
+    return np.where(m00 > 0, np.sqrt(np.maximum(total, 0)) / np.sqrt(3), np.nan)
 
 
 @dataclass

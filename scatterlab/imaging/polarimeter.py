@@ -143,7 +143,8 @@ def channel_images(stokes, angles, psfs=None) -> np.ndarray:
     psfs = as_finite(psfs, "psfs")
     if psfs.ndim == 3 and psfs.shape[0] != P.shape[0]:
         raise ValueError("psfs must be one PSF (H, W) or one per channel (K, H, W)")
-    return convolve(I, psfs)
+    # the FFT's round-off leaves -1e-16 where the image is dark: intensities are >= 0
+    return np.maximum(convolve(I, psfs), 0.0)
 
 
 def detect(

@@ -107,6 +107,10 @@ def otf(h) -> np.ndarray:
         Centred OTF, 1 at zero frequency.
     """
     h = np.asarray(h, float)
+    if not np.all(np.sum(h, axis=(-2, -1)) > 0):
+        raise ValueError(
+            "h must have a positive sum (a PSF with light): its OTF is normalised by it"
+        )
     O = np.fft.fftshift(np.fft.fft2(np.fft.ifftshift(h, axes=(-2, -1))), axes=(-2, -1))
     c = h.shape[-1] // 2
     return O / O[..., c, c][..., None, None]
@@ -200,7 +204,7 @@ def long_exposure_mtf(nu, d_over_r0) -> np.ndarray:
     Parameters
     ----------
     nu : array_like
-        Spatial frequency normalised by the cutoff ``D / lambda``.
+        Spatial frequency normalised by the cutoff ``D / lambda`` (clipped to [0, 1]).
     d_over_r0 : float
         Aperture diameter over Fried parameter, ``D / r0`` (> 0).
 
@@ -210,7 +214,7 @@ def long_exposure_mtf(nu, d_over_r0) -> np.ndarray:
         The long-exposure MTF.
     """
     d_over_r0 = float(as_positive(d_over_r0, "d_over_r0"))
-    nu = np.asarray(nu, float)
+    nu = np.clip(np.asarray(nu, float), 0, 1)
     return diffraction_mtf(nu) * np.exp(-3.44 * (nu * d_over_r0) ** (5 / 3))
 
 
@@ -224,7 +228,7 @@ def short_exposure_mtf(nu, d_over_r0, alpha: float = 1.0) -> np.ndarray:
     d_over_r0 : float
         Aperture diameter over Fried parameter, ``D / r0`` (> 0).
     alpha : float
-        1 in the near field, 0.5 in the far field.
+        1 in the near field, 0.5 in the far field (in [0, 1]).
 
     Returns
     -------
@@ -232,6 +236,10 @@ def short_exposure_mtf(nu, d_over_r0, alpha: float = 1.0) -> np.ndarray:
         The short-exposure MTF.
     """
     d_over_r0 = float(as_positive(d_over_r0, "d_over_r0"))
+    if np.ndim(alpha) != 0 or not 0.0 <= float(alpha) <= 1.0:
+        raise ValueError(
+            f"alpha must be a single float in [0, 1] (1 near field, 0.5 far), got {alpha!r}"
+        )
     nu = np.clip(np.asarray(nu, float), 0, 1)
     return diffraction_mtf(nu) * np.exp(
         -3.44 * (nu * d_over_r0) ** (5 / 3) * (1 - alpha * nu ** (1 / 3))

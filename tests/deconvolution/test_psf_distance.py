@@ -51,3 +51,15 @@ def test_an_estimate_on_another_grid_is_compared_on_the_truths():
 def test_bad_input_names_the_argument(h, truth, reach, name):
     with pytest.raises(ValueError, match=name):
         psf_distance(h, truth, reach)
+
+
+def test_an_estimate_with_all_its_light_outside_the_truths_grid_is_disjoint():
+    from scatterlab.deconvolution import resample_psf
+
+    h = np.zeros((64, 64))
+    h[0, 0] = 1.0  # a corner the 16 x 16 crop does not reach
+    truth = np.zeros((16, 16))
+    truth[8, 8] = 1.0
+    assert psf_distance(h, truth) == (2.0, (0, 0))
+    with pytest.raises(ValueError, match="no light inside"):
+        resample_psf(h, (16, 16))
