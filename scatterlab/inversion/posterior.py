@@ -1645,7 +1645,19 @@ def sample_posterior(
     starts = [None if r else start_walkers(problem, minima, opts.n_walkers, rng) for r in resumed]
     seeds = rng.integers(2**32, size=opts.n_ensembles)
     t0 = time.perf_counter()
-    samplers = run_ensembles(problem.log_post, problem.ndim, starts, opts, seeds, backends)
+    try:
+        samplers = run_ensembles(problem.log_post, problem.ndim, starts, opts, seeds, backends)
+    except np.linalg.LinAlgError as err:
+        if backend is not None or opts.moves != "kde":
+            raise
+        # the KDE move's covariance of one half of the walkers is singular when they lie in a lower-
+        # dimensional subspace (few walkers: 2 of 10 runs with 8 walkers for 3 parameters): one rerun
+        # with differential-evolution moves, which need no covariance
+        opts = replace(opts, moves="de")
+        starts = [start_walkers(problem, minima, opts.n_walkers, rng) for _ in resumed]
+        seeds = rng.integers(2**32, size=opts.n_ensembles)
+        samplers = run_ensembles(problem.log_post, problem.ndim, starts, opts, seeds, backends)
+        messages.append(f"emcee's KDE move failed ({type(err).__name__}); rerun with DE moves")
     post = diagnose(problem, samplers, opts, minima, messages, rng, time.perf_counter() - t0)
     if not post.converged:
         warnings.warn(post.convergence_reason, ConvergenceWarning, stacklevel=2)

@@ -266,3 +266,15 @@ def test_the_sampler_runs_with_one_blas_thread():
     opts = SamplerOptions(n_walkers=8, n_steps=3)
     run_ensembles(log_prob, 2, [np.random.default_rng(0).normal(size=(8, 2))], opts, [1])
     assert seen and set(seen) == {1}
+
+
+def test_a_singular_kde_move_is_rerun_with_de_moves():
+    """Eight walkers for three parameters: emcee's KDE move met a singular covariance of one half of the
+    walkers (numpy's LinAlgError escaped to the user in 2 of 10 seeds); it is rerun with DE moves, and
+    says so."""
+    g = np.r_[0.3, 0.6, 1.0, 1.2]
+    post = quiet_sample(
+        model_dolp(1.5, 0.1, 0.1, g, g), g, g, 0.01, 0, n_walkers=8, n_ensembles=1, n_steps=20
+    )
+    assert any("rerun with DE moves" in m for m in post.messages)
+    assert np.all(np.isfinite(post.chain))
