@@ -65,6 +65,11 @@ class IdentifiabilityWarning(UserWarning):
     """The data do not determine some parameter (singular Fisher information at the solution)."""
 
 
+class BoundWarning(IdentifiabilityWarning):
+    """A fit ended on a bound that is not a physical limit: the value there is the bound, not an
+    estimate (``DolpFit.at_bound``)."""
+
+
 def model_dolp(n, kappa, sigma, theta_i, theta_r, phi=np.pi, **model_kw) -> np.ndarray:
     """pBRDF DOLP for parameters ``(...)`` and geometries ``(M,)`` -> ``(..., M)``.
 
@@ -111,6 +116,10 @@ class DolpFit:
         Whether the data determine each parameter at the solution; an unidentifiable parameter has
         an
         infinite variance in ``covariance`` (NaN covariances), never a silently finite one.
+    at_bound : ndarray of bool (..., P) or None
+        Whether each parameter ended on a bound of the fit that is not a physical limit (every bound
+        but kappa = 0, a lossless medium): there the value is the bound, not an estimate, and the
+        covariance ignores the bound. A :class:`BoundWarning` says how many.
     """
 
     n: np.ndarray
@@ -122,6 +131,7 @@ class DolpFit:
     valid: np.ndarray
     iterations: int
     identifiable: np.ndarray | None = None
+    at_bound: np.ndarray | None = None
 
     @property
     def eta(self) -> np.ndarray:
@@ -472,7 +482,32 @@ def fit_dolp(
         forward, y0, mask.reshape(-1, M), valid.ravel(), starts, s0, lo, hi, options
     )
     p, cost, done = p.reshape(batch + (P,)), cost.reshape(batch), done.reshape(batch)
-    return _fit_result(forward, p, cost, done, iterations, mask, valid, noise, sig_known)
+    fit = _fit_result(forward, p, cost, done, iterations, mask, valid, noise, sig_known)
+    fit.at_bound = _at_bound(p, lo, hi, valid)
+    return fit
+
+
+def _at_bound(p, lo, hi, valid):
+    """(..., P) bool: on a bound other than kappa = 0, with a BoundWarning counting them."""
+    tol = 1e-9 * (hi - lo)
+    low = p <= lo + tol
+    low[..., 1] &= lo[1] > 0  # kappa = 0 is a lossless medium, a physical limit
+    at = (low | (p >= hi - tol)) & valid[..., None]
+    if np.any(at):
+        P = p.shape[-1]
+        where = ", ".join(
+            f"{nm} ({int(at[..., k].sum())})"
+            for k, nm in enumerate(PARAMETER_NAMES[:P])
+            if at[..., k].any()
+        )
+        warnings.warn(
+            f"the fit ended on a bound at {int(np.any(at, -1).sum())} of {int(valid.sum())} fitted "
+            f"pixel(s), in {where}: there the value is the bound, not an estimate; widen "
+            "FitOptions.bounds (see DolpFit.at_bound)",
+            BoundWarning,
+            stacklevel=3,
+        )
+    return at
 
 
 def _check_fit_setup(options: FitOptions, M: int, P: int):

@@ -121,3 +121,21 @@ def test_sigma_starts_are_checked(bad):
 
     with pytest.raises(ValueError, match="sigma_starts"):
         FitOptions(sigma_starts=bad).validate()
+
+
+def test_a_fit_pinned_on_a_bound_says_so():
+    """kappa = 1e3 with the default kappa bound 25: the fit returned 25 +- 7.8, 'converged' and
+    'identifiable', without a word. The value is the bound; kappa = 0 (a lossless medium) is a physical
+    limit, not a bound reached."""
+    import warnings
+
+    from scatterlab.inversion import BoundWarning
+
+    th = np.radians([30.0, 40.0, 50.0, 60.0, 70.0])
+    with pytest.warns(BoundWarning, match="in kappa"):
+        fit = fit_dolp(model_dolp(1.5, 1e3, 0.1, th, th), th, th)
+    assert fit.kappa == pytest.approx(25.0) and fit.at_bound.tolist() == [False, True, False]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", BoundWarning)
+        glass = fit_dolp(model_dolp(1.5, 0.0, 0.3, th, th), th, th, sigma=0.3)
+    assert not glass.at_bound.any()
