@@ -67,7 +67,7 @@ from scatterlab.characterization.estimation import DETERMINED_CONTRACTION
 STUDY = {
     "id": "characterization_coverage",
     "title": "Coverage of the characterization posteriors",
-    "reproduces": "ours (issue: honest uncertainty of the main job)",
+    "reproduces": "ours: honest uncertainty of the main job",
 }
 
 METALS = {

@@ -27,7 +27,7 @@ from scatterlab.characterization.pipeline import interior
 STUDY = {
     "id": "characterization_error_budget",
     "title": "Error budget of the characterization pipeline",
-    "reproduces": "ours (issue: the main job's accuracy), scene of Tables 4-5",
+    "reproduces": "ours: the main job's accuracy, scene of Tables 4-5",
 }
 
 VARIANTS = {

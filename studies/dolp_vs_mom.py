@@ -116,7 +116,7 @@ from scatterlab.pbrdf.inplane import dhr_pec_1d, dolp_1d, specular_lobe_1d
 STUDY = {
     "id": "dolp_vs_mom",
     "title": "The pBRDF's DOLP against exact MoM solutions, and its effect on n and kappa",
-    "reproduces": "own validation (issue 17)",
+    "reproduces": "own validation",
 }
 
 MATERIALS = (

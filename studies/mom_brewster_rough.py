@@ -22,7 +22,7 @@ from scatterlab.mom import TaperedWave, correlation_length_for_slope, rough_surf
 STUDY = {
     "id": "mom_brewster_rough",
     "title": "Rough glass in p-pol: the Brewster minimum (exact MoM)",
-    "reproduces": "own validation (issue 16, item 5)",
+    "reproduces": "own validation",
 }
 
 GLASS = 1.5

@@ -15,7 +15,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "mom_cylinder",
     "title": "MoM echo width of a PEC cylinder vs the exact series",
-    "reproduces": "own validation (issue 4): exact PEC cylinder series",
+    "reproduces": "own validation: exact PEC cylinder series",
 }
 
 

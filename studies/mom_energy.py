@@ -12,7 +12,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "mom_energy",
     "title": "MoM energy conservation vs incidence angle and roughness",
-    "reproduces": "own validation (issue 4): conservation of energy (Tsang et al.'s passive-sensing grade)",
+    "reproduces": "own validation: conservation of energy (Tsang et al.'s passive-sensing grade)",
 }
 
 

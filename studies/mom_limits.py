@@ -20,7 +20,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "mom_limits",
     "title": "MoM vs first-order perturbation theory and physical optics",
-    "reproduces": "own validation (issue 16, item 3: small-roughness and smooth limits)",
+    "reproduces": "own validation: small-roughness and smooth limits",
 }
 
 GLASS = 1.5

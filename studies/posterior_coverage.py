@@ -30,7 +30,7 @@ from scatterlab.inversion import ConvergenceWarning, model_dolp, sample_posterio
 STUDY = {
     "id": "coverage",
     "title": "Calibration curve of the posterior credible intervals",
-    "reproduces": "our own study (issue: honest uncertainty)",
+    "reproduces": "our own study: honest uncertainty",
 }
 
 TI = np.radians(np.r_[30, 35, 40, 45, 50, 55, 60, 45, 45, 45, 45])

@@ -11,10 +11,11 @@ BLOCKS = re.findall(r"```python\n(.*?)```", README.read_text(), re.S)
 
 
 @pytest.mark.parametrize("i", range(len(BLOCKS)))
-def test_readme_snippet_runs(i, monkeypatch):
-    monkeypatch.chdir(
-        README.parent
-    )  # paths in the snippets are relative to the repository (none writes)
+def test_readme_snippet_runs(i, monkeypatch, tmp_path):
+    # paths in the snippets are relative to the repository; what they write goes to results/, here in a
+    # temporary folder beside a link to the repository's data/
+    (tmp_path / "data").symlink_to(README.parent / "data")
+    monkeypatch.chdir(tmp_path)
     exec(compile(BLOCKS[i], f"README.md[python block {i}]", "exec"), {})
 
 

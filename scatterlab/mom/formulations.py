@@ -294,7 +294,8 @@ def _check_media(c, wavelength, eta, method, min_ppw):
             wavelength / abs(eta),
             min_ppw,
             f"inside (lambda / |eta| = "
-            f"{wavelength / abs(eta):.3g} m; or method='impedance' for a good conductor)",
+            f"{wavelength / abs(eta):.3g}, in the wavelength's unit; or method='impedance' for a good "
+            "conductor)",
         )
     if eta is not None and method == "impedance" and abs(eta) < 3:
         warnings.warn(

@@ -107,7 +107,7 @@ class TaperedWave:
             g_min = 10 / (k * np.cos(self.theta))
             raise ValueError(
                 f"taper too narrow for theta = {np.degrees(self.theta):.1f} deg: k g cos(theta) = "
-                f"{kgc:.2f} < 10; use g >= {g_min:.4g} m (a longer surface may be needed)"
+                f"{kgc:.2f} < 10; use g >= {g_min:.4g} (the wavelength's unit; a longer surface may be needed)"
             )
         corr = (1 + 2 * np.tan(self.theta) ** 2) / (2 * kgc**2)
         if corr > 0.02:
@@ -115,7 +115,7 @@ class TaperedWave:
             raise ValueError(
                 f"taper too narrow for theta = {np.degrees(self.theta):.1f} deg: the tapered wave's power "
                 f"correction (1 + 2 tan^2)/(2 (k g cos)^2) = {corr:.3f} exceeds 0.02 (energy errors of "
-                f"several percent); use g >= {g_min:.4g} m and a surface of at least 4 g"
+                f"several percent); use g >= {g_min:.4g} (the wavelength's unit) and a surface of at least 4 g"
             )
         if not self.correction and kgc**-2 > 1e-3:
             raise ValueError(

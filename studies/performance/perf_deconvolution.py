@@ -17,7 +17,7 @@ from scatterlab.runtime import best_time
 STUDY = {
     "id": "perf_deconvolution",
     "title": "EM blind deconvolution: iterations vs error vs time; cost vs Richardson-Lucy",
-    "reproduces": "own performance study (issue 8, item 7)",
+    "reproduces": "own performance study",
 }
 
 

@@ -23,7 +23,7 @@ from scatterlab.runtime import best_time
 STUDY = {
     "id": "perf_dhr",
     "title": "DHR quadrature order and table size: error against run time",
-    "reproduces": "own performance study (issue 3, item 10)",
+    "reproduces": "own performance study",
 }
 
 

@@ -17,7 +17,7 @@ from scatterlab.runtime import best_time
 STUDY = {
     "id": "perf_ecm",
     "title": "Ellipsometry: repeats and ECM tolerance vs error vs time; image throughput",
-    "reproduces": "own performance study (issue 5, item 7)",
+    "reproduces": "own performance study",
 }
 
 

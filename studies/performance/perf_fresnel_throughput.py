@@ -22,7 +22,7 @@ from scatterlab.runtime import best_time
 STUDY = {
     "id": "perf_fresnel",
     "title": "Vectorised Fresnel and Jones-to-Mueller throughput vs a Python loop",
-    "reproduces": "own benchmark (issue 2, item 10)",
+    "reproduces": "own benchmark",
 }
 
 

@@ -34,7 +34,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "perf_inversion",
     "title": "Batched vs per-pixel least squares of (n, kappa, sigma)",
-    "reproduces": "own performance study (issue 6, item 8)",
+    "reproduces": "own performance study",
 }
 
 TRUTHS = np.array([(1.39, 0.34), (1.44, 16.0), (3.6, 5.88)])

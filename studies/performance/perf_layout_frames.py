@@ -47,7 +47,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "perf_layout_frames",
     "title": "Exposures sharing a pure few-material layout: rounds and frames vs PSF error, paint DOLP, time",
-    "reproduces": "own performance study (issue 14: what identifies the blind PSFs and the dim material)",
+    "reproduces": "own performance study: what identifies the blind PSFs and the dim material",
 }
 
 PAINT_DOLP = 0.8

@@ -58,7 +58,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "perf_layout_psf",
     "title": "Few-material object and pupil phase: rounds vs PSF and restoration error vs time",
-    "reproduces": "own performance study (issue 14: the prior that makes one frame's PSF identifiable)",
+    "reproduces": "own performance study: the prior that makes one frame's PSF identifiable",
 }
 
 

@@ -22,7 +22,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "perf_mcmc",
     "title": "MCMC length vs quantile error vs time; effective samples per second",
-    "reproduces": "own performance study (issue 6, item 8)",
+    "reproduces": "own performance study",
 }
 
 TI = np.radians(np.r_[30, 35, 40, 45, 50, 55, 60, 45, 45, 45, 45])

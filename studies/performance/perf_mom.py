@@ -28,7 +28,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "perf_mom",
     "title": "Method of moments: error vs run time, LU vs forward-backward, fill vs solve",
-    "reproduces": "own performance study (issue 4, item 8)",
+    "reproduces": "own performance study",
 }
 
 K = 2 * np.pi

@@ -25,7 +25,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "perf_mom_fast",
     "title": "Fast MoM path (BMIA/CAG): error vs run time, cost growth, 10^5 unknowns",
-    "reproduces": "own performance study (issue 16, items 2 and 4)",
+    "reproduces": "own performance study",
 }
 
 SIGMA_H, SLOPE, PPW = 0.3, 0.3, 10

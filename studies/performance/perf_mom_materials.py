@@ -33,7 +33,7 @@ from scatterlab.mom import (
 STUDY = {
     "id": "perf_mom_materials",
     "title": "MoM materials and polarizations: error vs run time",
-    "reproduces": "own performance study (issue 16, item 4)",
+    "reproduces": "own performance study",
 }
 
 K = 2 * np.pi

@@ -41,7 +41,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "perf_multiframe",
     "title": "Multi-frame blind deconvolution: frames and PSF model vs error vs time",
-    "reproduces": "own performance study (issue 14: is the blind PSF estimate a matter of frames?)",
+    "reproduces": "own performance study: is the blind PSF estimate a matter of frames?",
 }
 
 

@@ -18,7 +18,7 @@ from scatterlab.runtime import best_time
 STUDY = {
     "id": "perf_pbrdf",
     "title": "pBRDF throughput against pySCATMECH",
-    "reproduces": "own benchmark (issue 3, item 10)",
+    "reproduces": "own benchmark",
 }
 
 

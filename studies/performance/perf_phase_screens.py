@@ -14,7 +14,7 @@ from scatterlab.runtime import best_time
 STUDY = {
     "id": "perf_phase_screens",
     "title": "Phase screens: accuracy vs time; speed vs AOtools",
-    "reproduces": "own performance study (issue 7, items 6 and 8)",
+    "reproduces": "own performance study",
 }
 
 

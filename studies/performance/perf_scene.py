@@ -23,7 +23,7 @@ from scatterlab.runtime import Stopwatch, best_time
 STUDY = {
     "id": "perf_scene",
     "title": "Whole 4-channel 512 x 512 scene simulation time",
-    "reproduces": "own performance study (issue 7, item 8)",
+    "reproduces": "own performance study",
 }
 GOAL_SIZE, GOAL_S = 512, 1.0  # issue 7, item 8
 

@@ -35,7 +35,7 @@ from scatterlab.plotting import headless_pyplot as plt
 STUDY = {
     "id": "perf_self_calibration",
     "title": "Blind self-calibration: replicates vs accuracy vs time",
-    "reproduces": "own performance study (issue 14: honest uncertainty of the main job)",
+    "reproduces": "own performance study: honest uncertainty of the main job",
 }
 
 METAL_CHOICES = (("titanium", 3.69, 4.59), ("iron", 3.60, 5.88), ("copper", 0.61, 10.4))
