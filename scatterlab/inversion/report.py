@@ -59,6 +59,10 @@ def summary_table(post: Posterior, truth=None) -> str:
     rows = [head, sep]
     for k, name in enumerate(PARAMETERS):
         p = s[name]
+        if name == "sigma" and post.sigma_known is not None:  # not sampled: say so, not "0.3 +/- 0"
+            row = f"| sigma | {post.sigma_known:.4g} (known, not sampled) | | | |"
+            rows.append(row + (f" {truth[k]:.4g} |" if truth is not None else ""))
+            continue
         row = (
             f"| {name} | {p['median']:.4g} | [{p['ci68'][0]:.4g}, {p['ci68'][1]:.4g}] | "
             f"[{p['ci95'][0]:.4g}, {p['ci95'][1]:.4g}] | "

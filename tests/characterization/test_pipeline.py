@@ -234,3 +234,13 @@ def test_failure_notes_give_the_cause_and_the_chance_of_interval_misses():
     assert "steel D/r0 = 7.9: 1.23" in text
     assert "1.23" not in "\n".join(_failure_notes([res], checks, Ideal(psf=True)))
     assert _failure_notes([res], [(c, v, True) for c, v, _ in checks], Ideal()) == []
+    # a metal's marginal interval is not a calibrated statement: named apart, not counted
+    ridge = (
+        "steel: steel posterior 68 % interval of n covers the truth (no turbulence)",
+        "",
+        False,
+    )
+    text = "\n".join(_failure_notes([res], [*checks, ridge], Ideal()))
+    assert (
+        "1 of the metals' marginal 68 % intervals miss" in text and "1 of 3 68 % statements" in text
+    )

@@ -278,3 +278,14 @@ def test_a_singular_kde_move_is_rerun_with_de_moves():
     )
     assert any("rerun with DE moves" in m for m in post.messages)
     assert np.all(np.isfinite(post.chain))
+
+
+def test_a_known_sigma_is_reported_as_known_not_as_an_interval():
+    from scatterlab.inversion.report import summary_table
+
+    th = np.radians([30.0, 40.0, 50.0, 60.0])
+    post = quiet_sample(
+        model_dolp(1.39, 0.34, 0.3, th, th), th, th, 0.005, 1, sigma=0.3, n_steps=200
+    )
+    table = summary_table(post, truth=(1.39, 0.34, 0.3))
+    assert "| sigma | 0.3 (known, not sampled) |" in table and "[0.3, 0.3]" not in table
