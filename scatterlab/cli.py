@@ -10,6 +10,7 @@
                      [--classes adaptive|priors] [--bias-samples N] [--model-error] [--frames F]
                      [--psf-refine none|layout]
     scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--time-convention exp(-iwt)]
+    scatterlab fit-dolp FILE.csv [--out DIR] [--sigma S] [--noise N] [--angle-unit rad]
 
 Sweeps inside studies use ``--workers N`` local processes or a Dask cluster
 given by ``--scheduler ADDRESS``.
@@ -99,6 +100,7 @@ commands:
   characterize   simulate, deconvolve, classify and invert a painted-plate scene (TOML) end to end
   analyze        restore, classify and invert measured polarimetric channel images (a dataset) end to end
   fit-mueller    fit n, kappa, sigma of the pBRDF to a measured Mueller BRDF table (CSV) and report
+  fit-dolp       posterior of n, kappa (and sigma) from measured DOLP against geometry (CSV) and report
 
 Run `scatterlab COMMAND --help` for a command's options. Angles are in degrees on the command line
 and in files, radians in the Python API.
@@ -273,6 +275,92 @@ def _fit_mueller(args) -> int:
     return 0
 
 
+def _fit_dolp(args) -> int:
+    import numpy as np
+
+    from scatterlab.inversion import sample_posterior
+    from scatterlab.inversion.report import posterior_report
+    from scatterlab.io.dolp_table import read_dolp_table
+
+    try:
+        if args.sigma is not None and not 1e-3 <= args.sigma <= 2.5:
+            raise ValueError(f"--sigma must be a known rms slope in [0.001, 2.5], got {args.sigma}")
+        if args.noise is not None and not (np.isfinite(args.noise) and args.noise > 0):
+            raise ValueError(f"--noise must be a DOLP standard deviation > 0, got {args.noise}")
+        data = read_dolp_table(args.file, angle_unit=args.angle_unit)
+        # the error: --noise, else the file's per-row std (a diagonal covariance), else inferred
+        noise = args.noise
+        cov = np.diag(data.std**2) if noise is None and data.std is not None else None
+        post = sample_posterior(
+            data.dolp,
+            data.theta_i,
+            data.theta_r,
+            noise,
+            args.seed,
+            phi=data.phi,
+            sigma=args.sigma,
+            covariance=cov,
+            n_steps=args.posterior_steps,
+        )
+        report = posterior_report(post, args.out, "fit_dolp", rng=args.seed, overwrite=args.force)
+    except (ValueError, FileExistsError, FileNotFoundError) as exc:
+        print(f"scatterlab: {_message(exc)}", file=sys.stderr)
+        return 2
+    s = post.summary()["parameters"]
+    names = ("n", "kappa") if args.sigma is not None else ("n", "kappa", "sigma")
+    print(
+        ", ".join(
+            f"{k} = {s[k]['median']:.4g} [68 %: {s[k]['ci68'][0]:.4g}, {s[k]['ci68'][1]:.4g}]"
+            for k in names
+        )
+        + (f" (sigma {args.sigma:g} known)" if args.sigma is not None else "")
+        + (
+            ""
+            if noise is not None or cov is not None
+            else f"; DOLP noise inferred: {s['noise']['median']:.2g}"
+            if "noise" in s
+            else ""
+        )
+    )
+    if not post.converged:
+        print(f"scatterlab: warning: {post.convergence_reason}", file=sys.stderr)
+    print(f"report: {report}")
+    return 0
+
+
+def _add_fit_dolp(sub):
+    fd = sub.add_parser(
+        "fit-dolp",
+        help="n, kappa (and sigma) with their posterior from measured DOLP against geometry (CSV)",
+        description="Posterior of the complex index n - j kappa and the roughness sigma from a table "
+        "of DOLP against geometry: columns theta (specular) or theta_i and theta_r, optionally phi "
+        "(relative azimuth, default 180), dolp, optionally std_dolp; angles in degrees. Writes a "
+        "Markdown report with the posterior table, a corner plot and the posterior predictive.",
+    )
+    fd.add_argument("file", help="CSV table of DOLP against geometry")
+    fd.add_argument("--out", default="results/fit-dolp", help="output folder")
+    fd.add_argument("--force", action="store_true", help="replace an existing report")
+    fd.add_argument(
+        "--angle-unit", default="deg", choices=["deg", "rad"], help="unit of the angle columns"
+    )
+    fd.add_argument(
+        "--sigma", type=float, default=None, help="known roughness (rms slope); default: sampled"
+    )
+    fd.add_argument(
+        "--noise",
+        type=float,
+        default=None,
+        help="DOLP standard deviation of every row (default: the file's std column, else inferred)",
+    )
+    fd.add_argument(
+        "--posterior-steps",
+        type=int,
+        default=None,
+        help="MCMC chain length (default: run until converged)",
+    )
+    fd.add_argument("--seed", type=int, default=20101210, help="random seed (default 20101210)")
+
+
 def _add_fit_mueller(sub):
     fm = sub.add_parser(
         "fit-mueller",
@@ -373,6 +461,7 @@ def main(argv=None) -> int:
     ch.add_argument("--workers", type=int, default=None, help="local worker processes")
     ch.add_argument("--scheduler", default=None, help="Dask scheduler address")
     _add_fit_mueller(sub)
+    _add_fit_dolp(sub)
     an = sub.add_parser(
         "analyze", help="restore, classify and invert measured channel images (no simulation)"
     )
@@ -442,6 +531,7 @@ def main(argv=None) -> int:
         "study": _study,
         "characterize": _characterize,
         "fit-mueller": _fit_mueller,
+        "fit-dolp": _fit_dolp,
     }
     with warnings.catch_warnings():  # a warning is a line for the user, not a source listing
         warnings.showwarning = _show_warning

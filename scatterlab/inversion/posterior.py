@@ -740,7 +740,8 @@ def _problem_minima(
     # an undetermined direction (infinite error), and one copy of each says it
     if any(not np.all(np.isfinite(f.errors)) for f in minima):
         said = dict.fromkeys(
-            f"least squares: {w.message}"
+            f"at a least-squares minimum that starts the sampler: {w.message} (the intervals are the "
+            "posterior's)"
             for w in caught
             if issubclass(w.category, IdentifiabilityWarning)
         )

@@ -10,6 +10,8 @@
   aluminium at 1.064 and 1.55 um, exp(+jwt);
 * ``ellipsometry_in_plane.csv`` -- in-plane normalised elements of aluminium at 1.064 um with
   standard deviations;
+* ``dolp_paint.csv`` -- the specular DOLP of the green paint (1.39 - 0.34j, sigma 0.3) at 1.55 um,
+  20-70 deg, with noise 0.01 and its standard deviation (``scatterlab fit-dolp``);
 * ``painted_plate.h5`` / ``.npz`` / ``.tif`` + ``.toml`` -- a painted aluminium plate with
   bare-metal letters (:func:`scatterlab.imaging.painted_plate`), 64x64 pixels, 2 specular geometries
   (40 and 55 deg), 4 channels (0/45/90/135 deg) through one Kolmogorov phase screen each (D/r0 =
@@ -208,6 +210,7 @@ def write_examples(out="data/examples", *, overwrite: bool = False) -> list[Path
             overwrite=overwrite,
             description=label + "; aluminium at 1.064 um (1.226 - 10.413j, sigma 0.43)",
         ),
+        _dolp_paint(rng, out / "dolp_paint.csv", label, overwrite),
     ]
     ds = simulate_painted_plate(rng=SEED)
     paths += [
@@ -219,6 +222,22 @@ def write_examples(out="data/examples", *, overwrite: bool = False) -> list[Path
         ),
     ]
     return paths
+
+
+def _dolp_paint(rng, path, label, overwrite):
+    from scatterlab.inversion import model_dolp
+    from scatterlab.io.dolp_table import DolpData, write_dolp_table
+
+    th = np.radians(np.arange(20.0, 71.0, 5.0))
+    noise = 0.01
+    dolp = model_dolp(PAINT.real, -PAINT.imag, 0.3, th, th) + noise * rng.standard_normal(th.size)
+    data = DolpData(th, th, np.full(th.size, np.pi), np.round(dolp, 6), np.full(th.size, noise))
+    return write_dolp_table(
+        path,
+        data,
+        overwrite=overwrite,
+        description=label + "; specular DOLP of green paint (1.39 - 0.34j, sigma 0.3), noise 0.01",
+    )
 
 
 def main(argv=None) -> int:

@@ -38,6 +38,10 @@ def test_examples_read_as_described():
     assert m.wavelength[0] == pytest.approx(1.55e-6) and m.std is None
     two = read_mueller_brdf(EXAMPLES / "mueller_brdf_two_wavelengths.csv")
     assert two.wavelengths == pytest.approx([1.064e-6, 1.55e-6]) and two.std is not None
+    from scatterlab.io import read_dolp_table
+
+    dolp = read_dolp_table(EXAMPLES / "dolp_paint.csv")
+    assert dolp.specular and dolp.dolp.size == 11 and np.all(dolp.std == 0.01)
     e = read_ellipsometry(EXAMPLES / "ellipsometry_in_plane.csv")
     assert e.wavelength == pytest.approx(1.064e-6) and e.std.shape == e.elements.shape
     sets = {
