@@ -174,9 +174,10 @@ class HyperCauchy(FacetDistribution):
     def smith_lambda(self, tan_theta):
         if self.nu != 2.0:
             return super().smith_lambda(tan_theta)
-        t = np.asarray(tan_theta, float)
-        x = (self.b * t) ** 2
-        return x / (1 + np.sqrt(1 + x)) / 2  # (sqrt(1 + b^2 tan^2) - 1)/2 without cancellation
+        y = np.abs(self.b * np.asarray(tan_theta, float))
+        # (sqrt(1 + y^2) - 1)/2 without cancellation at small y, nor overflow of y^2 at grazing
+        # (tan ~ 1e300 from the slope quadrature): y/(1 + hypot(1, y)) <= 1
+        return y * (y / (1 + np.hypot(1.0, y))) / 2
 
     def smith_lambda_cos(self, cos_theta):
         """``cos(theta) Lambda = b^2 sin^2 / (2 (cos + sqrt(cos^2 + b^2 sin^2)))`` (nu = 2), finite at grazing."""

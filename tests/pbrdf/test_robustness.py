@@ -212,3 +212,26 @@ def test_heavy_tailed_slopes_without_shadowing_keep_a_non_negative_dhr():
     assert m.dolp(1.5, np.radians(85), np.radians(85)) == pytest.approx(
         (rs - rp) / (rs + rp), rel=1e-9
     )
+
+
+def test_hypercauchy_smith_is_finite_at_grazing():
+    """HyperCauchy(nu = 2) has Smith's closed form Lambda = (sqrt(1 + b^2 tan^2) - 1)/2; (b tan)^2
+    overflowed at the slope quadrature's tan ~ 1e300, and the Model with Smith shadowing failed for every
+    b. Independent truths: the closed form where it is computable, and 0 <= rho <= 1."""
+    import warnings
+
+    from scatterlab.pbrdf import HyperCauchy, Model
+
+    h = HyperCauchy(0.3)
+    t = np.array([0.0, 1e-3, 1.0, 30.0])
+    exact = np.expm1(np.log1p((0.3 * t) ** 2) / 2) / 2  # sqrt(1 + y^2) - 1 without cancellation
+    np.testing.assert_allclose(h.smith_lambda(t), exact, rtol=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert h.smith_lambda(np.array([1e300]))[0] == pytest.approx(0.15e300)
+        for b in (0.01, 0.3, 3.0):
+            m = Model(distribution=HyperCauchy(b), shadowing="smith")
+            F = m.mueller(1.5, 0.5, 0.5, np.pi)
+            rho = m.dhr_pec(np.radians([0.0, 60.0, 89.99, 90.0]))
+            assert np.all(np.isfinite(F)) and F[0, 0] > 0
+            assert np.all((rho >= 0) & (rho <= 1))
