@@ -10,6 +10,7 @@ from scatterlab.deconvolution import (
     PRIOR_SETS,
     SuperGaussianPrior,
     blind_deconvolve,
+    classify_dolp,
     dolp_update,
     dolp_update_companion,
     map_objective,
@@ -49,6 +50,7 @@ CASES = [
     (lambda: imaging.short_exposure_mtf(np.array([0.5]), 2.0, alpha=5.0), "alpha"),
     (lambda: imaging.otf(np.zeros((8, 8))), "positive sum"),
     (lambda: imaging.mtf(np.zeros((8, 8))), "positive sum"),
+    (lambda: classify_dolp(np.array([0.5, np.nan]), PRIOR_SETS["ch5"]), "dolp must be finite"),
     (lambda: SuperGaussianPrior(1e40, 0.3), "c2"),
     (lambda: SuperGaussianPrior(3.0, 1.5), "c3"),
 ]

@@ -58,7 +58,7 @@ def classify_dolp(dolp, priors) -> np.ndarray:
     Parameters
     ----------
     dolp : array_like, any shape
-        Degree of linear polarization per pixel, in [0, 1].
+        Degree of linear polarization per pixel, in [0, 1] (finite: a pixel without light has no class).
     priors : sequence of SuperGaussianPrior
         The DOLP priors (at least one).
 
@@ -70,6 +70,12 @@ def classify_dolp(dolp, priors) -> np.ndarray:
     P = np.asarray(dolp, float)
     if not priors:
         raise ValueError("priors must list at least one SuperGaussianPrior")
+    bad = ~np.isfinite(P)
+    if bad.any():  # NaN is a pixel without light: no class, not the first prior's
+        raise ValueError(
+            f"dolp must be finite: {int(bad.sum())} pixel(s) are NaN or inf (no light); mask them, "
+            "or give them a DOLP with numpy.nan_to_num"
+        )
     with np.errstate(over="ignore"):
         logs = np.stack(
             [np.nan_to_num(pr.log_pdf(P), nan=-np.inf, neginf=-np.inf) for pr in priors]
