@@ -104,8 +104,9 @@ def stokes_vector(intensity=1.0, dop=0.0, aop=0.0, ellipticity=0.0) -> np.ndarra
 
 
 def _ratio(num, den, floor=0.0):
-    """``num / den`` where ``den > floor``, NaN elsewhere (no warnings)."""
-    ok = den > floor
+    """``num / den`` where ``den > floor``, NaN elsewhere and where either is not finite (an infinite
+    S0 or S1 leaves the ratio undefined: inf / x and x / inf are not DOLPs) -- no warnings."""
+    ok = (den > floor) & np.isfinite(den) & np.isfinite(num)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(ok, num / np.where(ok, den, 1.0), np.nan)
 
@@ -183,6 +184,8 @@ def signed_dolp(S, aop=0.0, *, min_intensity: float = 0.0) -> np.ndarray:
     """
     S = _linear(S)
     a2 = 2 * np.asarray(aop, float)
+    if not np.all(np.isfinite(a2)):
+        raise ValueError("aop must be finite [rad]")
     proj = S[..., 1] * np.cos(a2) + S[..., 2] * np.sin(a2)
     return _ratio(proj, S[..., 0], _min_intensity(min_intensity))
 

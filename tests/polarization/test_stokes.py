@@ -91,3 +91,17 @@ def test_signed_dolp_is_the_projection_on_a_known_aop():
     signed = P.signed_dolp(noisy)
     assert abs(signed.mean()) < 4 * sigma / np.sqrt(n)
     assert P.dolp(noisy).mean() == pytest.approx(np.sqrt(np.pi / 2) * sigma, rel=0.03)
+
+
+def test_infinite_stokes_entries_give_nan_not_a_number_that_looks_like_a_dolp():
+    """sqrt(S1^2 + S2^2) / S0 with an infinite S0 gave 0, with an infinite S1 inf: undefined, NaN."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert np.isnan(P.dolp([np.inf, 1.0, 0.0, 0.0])) and np.isnan(
+            P.dolp([1.0, np.inf, 0.0, 0.0])
+        )
+        assert P.dolp([2.0, 1.0, 0.0, 0.0]) == 0.5
+    with pytest.raises(ValueError, match="aop"):
+        P.signed_dolp(np.array([1.0, 0.5, 0.0]), np.inf)
