@@ -22,6 +22,10 @@ GOOD = np.random.default_rng(0).poisson(100, (4, 16, 16)).astype(float)
 CASES = [
     (lambda: imaging.phase_screen(32, 0.01, 0.1, 1, l0=np.nan), "l0"),
     (lambda: imaging.phase_screen(32, 0.01, 1e-300, 1), "r0"),
+    (lambda: imaging.phase_screen(16, 1e-300, 0.1, 1), "too large for a screen"),
+    (lambda: imaging.phase_screen(16, 0.01, 0.1, 1, L0=-np.inf), "L0"),
+    (lambda: imaging.SlidingScreen(16, 0.01, 0.1, 1).window(np.nan), "shift"),
+    (lambda: imaging.remove_piston_tilt(np.ones((8, 8)), np.zeros((8, 8), bool)), "mask"),
     (lambda: imaging.psf(np.zeros((8, 8))), "pupil"),
     (lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=10, read_noise=np.nan), "read_noise"),
     (lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=np.inf), "photons"),
@@ -112,3 +116,16 @@ def test_a_compact_psf_over_a_dark_scene_gives_non_negative_channels():
 def test_long_exposure_mtf_clips_frequencies_like_the_others():
     nu = np.array([-0.1, 0.0, 1.2])
     np.testing.assert_allclose(imaging.long_exposure_mtf(nu, 2.0), [1.0, 1.0, 0.0], atol=1e-12)
+
+
+def test_a_phase_screen_depends_on_lengths_only_through_their_ratio_to_r0():
+    """dx and r0 in any unit (1e-200 or 1e300) give the same screen: they overflowed or divided by zero."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        a = imaging.phase_screen(16, 0.01, 0.1, 1)
+        for scale in (1e-200, 1e290):
+            np.testing.assert_allclose(
+                imaging.phase_screen(16, 0.01 * scale, 0.1 * scale, 1), a, atol=1e-12
+            )

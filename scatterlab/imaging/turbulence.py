@@ -228,6 +228,7 @@ def rytov_variance_from_r0(r0, path_length, wavelength):
 
 
 MAX_D_OVER_R0 = 1e6  # a screen width over r0 beyond this has phase differences no grid samples
+MIN_D_OVER_R0 = 1e-6  # below, the rms phase is under 1e-5 rad
 
 
 def _check_screen_args(n, dx, r0, L0, l0):
@@ -235,10 +236,15 @@ def _check_screen_args(n, dx, r0, L0, l0):
         raise ValueError("n (screen size in pixels) must be an integer >= 4")
     dx = float(as_positive(dx, "dx"))
     r0 = float(as_positive(r0, "r0"))
-    if not (np.isinf(L0) or L0 > 0):
-        raise ValueError("L0 (outer scale) must be > 0 or inf")
+    if not (L0 == np.inf or (np.isfinite(L0) and L0 > 0)):
+        raise ValueError(f"L0 (outer scale) must be > 0 or +inf, got {L0!r}")
     if not (np.isfinite(l0) and l0 >= 0):
         raise ValueError(f"l0 (inner scale) must be a finite length >= 0, got {l0!r}")
+    if n * dx / r0 < MIN_D_OVER_R0:
+        raise ValueError(
+            f"r0 = {r0:g} m is too large for a screen {n * dx:g} m wide: D/r0 = {n * dx / r0:.3g} must "
+            f"be >= {MIN_D_OVER_R0:g} (the phase would be below 1e-5 rad: no turbulence to simulate)"
+        )
     if n * dx / r0 > MAX_D_OVER_R0:
         raise ValueError(
             f"r0 = {r0:g} m is too small for a screen {n * dx:g} m wide: D/r0 = {n * dx / r0:.3g} "
@@ -374,8 +380,16 @@ def phase_screen(n, dx, r0, rng=None, L0=np.inf, subharmonics=True, l0=0.0):
     """
     dx, r0 = _check_screen_args(n, dx, r0, L0, l0)
     rng = np.random.default_rng(rng)
+    # in units of r0 (the screen depends on dx / r0, L0 / r0 and l0 / r0 only): no overflow for lengths
+    # given in any unit, 1e-200 or 1e300
     return _fft_field(
-        (n, n), dx, r0, float(L0), float(l0), rng, SUBHARMONIC_LEVELS if subharmonics else 0
+        (n, n),
+        dx / r0,
+        1.0,
+        float(L0) / r0,
+        float(l0) / r0,
+        rng,
+        SUBHARMONIC_LEVELS if subharmonics else 0,
     )
 
 
@@ -401,10 +415,10 @@ class SlidingScreen:
         self.n, self.dx = n, dx
         self.strip = _fft_field(
             (n, length),
-            dx,
-            r0,
-            float(L0),
-            float(l0),
+            dx / r0,  # in units of r0, as phase_screen
+            1.0,
+            float(L0) / r0,
+            float(l0) / r0,
             rng,
             SUBHARMONIC_LEVELS if subharmonics else 0,
         )
@@ -412,6 +426,8 @@ class SlidingScreen:
     def window(self, shift) -> np.ndarray:
         """The (n, n) window starting ``shift`` pixels (float: Fourier-interpolated) along the strip."""
         length = self.strip.shape[1]
+        if not np.isfinite(shift):
+            raise ValueError(f"shift must be a finite number of pixels, got {shift!r}")
         if float(shift).is_integer():
             idx = (int(shift) + np.arange(self.n)) % length
             return self.strip[:, idx]
@@ -445,6 +461,11 @@ def remove_piston_tilt(phase, mask=None) -> np.ndarray:
     ny, nx = phase.shape[-2:]
     y, x = np.mgrid[0:ny, 0:nx]
     m = np.ones((ny, nx), bool) if mask is None else np.asarray(mask, bool)
+    if m.shape != (ny, nx) or m.sum() < 3:
+        raise ValueError(
+            f"mask must be a boolean ({ny}, {nx}) array with at least 3 pixels (piston and two "
+            f"tilts), got shape {m.shape} with {int(m.sum())}"
+        )
     G = np.stack([np.ones(m.sum()), x[m], y[m]], 1)
     coef, *_ = np.linalg.lstsq(G, phase[..., m].reshape(-1, m.sum()).T, rcond=None)
     plane = coef[0][:, None, None] + coef[1][:, None, None] * x + coef[2][:, None, None] * y
