@@ -369,3 +369,22 @@ def test_p_pol_physical_optics_limit_for_gentle_slopes():
         errs[slope] = np.linalg.norm(sol.surface_field[mid] - po[mid]) / np.linalg.norm(po[mid])
     assert errs[0.05] < 0.05
     assert errs[0.6] > 4 * errs[0.05]
+
+
+@pytest.mark.parametrize("pol", ["s", "p"])
+def test_series_tends_to_the_perfect_conductor_as_the_index_grows(pol):
+    """A good conductor's series approaches the PEC's as 1/|m| (the impedance condition's limit); at
+    |m| = 1.4e6 it took 2e6 orders and minutes, and overflowed along the way. Independent truth: the PEC
+    series; the error falls tenfold per tenfold |m|."""
+    import warnings
+
+    phi = np.linspace(0, np.pi, 40)
+    pec = cylinder_echo_width(10.0, phi, polarization=pol)
+    err = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for m in (1e4, 1e5, 1e6):
+            w = cylinder_echo_width(10.0, phi, polarization=pol, eta=m * (1 - 1j))
+            err.append(np.max(np.abs(w - pec)) / pec.max())
+    assert err[-1] < 2e-5 and err[0] / err[1] == pytest.approx(10, rel=0.05)
+    assert err[1] / err[2] == pytest.approx(10, rel=0.05)
