@@ -122,9 +122,11 @@ def fisher_information(
     -------
     ndarray (..., P, P)
     """
-    noise = np.asarray(noise, float)
-    if not np.all(np.isfinite(noise) & (noise > 0)):
-        raise ValueError("noise must be a positive, finite DOLP standard deviation")
+    from scatterlab.inversion.least_squares import check_noise
+
+    noise = check_noise(noise)  # in [1e-12, 1]
+    if noise is None:
+        raise ValueError("noise must be a DOLP standard deviation in [1e-12, 1], got None")
     n, kappa, sigma = _check_truth(n, kappa, sigma)
     P = 2 if sigma_known else 3
     ti = as_angle(theta_i, "theta_i").ravel()

@@ -58,6 +58,9 @@ __all__ = [
 
 PARAMETER_NAMES = ("n", "kappa", "sigma")
 DEFAULT_BOUNDS = {"n": (0.0, 5.0), "kappa": (0.0, 25.0), "sigma": (0.01, 1.5)}
+# a DOLP's standard deviation: below 1e-12 the whitened residuals overflow in squares, above 1 (the
+# whole range of a DOLP) it says nothing
+NOISE_RANGE = (1e-12, 1.0)
 DOLP_MARGIN = 0.05  # how far outside [0, 1] a measured DOLP may fall (noise) before it is refused
 
 
@@ -268,9 +271,10 @@ def check_noise(noise, name: str = "noise"):
         raise ValueError(
             f"{name} must be a positive DOLP standard deviation, got {noise!r}"
         ) from exc
-    if not np.all(np.isfinite(arr) & (arr > 0)):
+    if not np.all(np.isfinite(arr) & (arr >= NOISE_RANGE[0]) & (arr <= NOISE_RANGE[1])):
         raise ValueError(
-            f"{name} must be a positive, finite DOLP standard deviation (or None), got {noise!r}"
+            f"{name} must be a DOLP standard deviation in [{NOISE_RANGE[0]:g}, {NOISE_RANGE[1]:g}] "
+            f"(or None), got {noise!r}"
         )
     return arr
 

@@ -66,7 +66,7 @@ def test_fit_dolp_accepts_noise_margin_and_nan():
     assert fit_dolp(y, TI, TR, noise=0.02).valid
 
 
-@pytest.mark.parametrize("noise", [0.0, -1e-3, np.nan, np.inf, [1e-3, -1e-3]])
+@pytest.mark.parametrize("noise", [0.0, -1e-3, np.nan, np.inf, [1e-3, -1e-3], 1e-300, 1e300, 2.0])
 def test_fit_dolp_refuses_bad_noise(noise):
     y = np.stack([model_dolp(*PAINT, TI, TR)] * 2)
     with pytest.raises(ValueError, match="noise"):
@@ -186,3 +186,20 @@ def test_rng_takes_what_default_rng_takes_and_moves_and_backends_as_emcee_object
     assert (tmp_path / "1" / "p_predictive.png").read_bytes() == (
         tmp_path / "2" / "p_predictive.png"
     ).read_bytes()
+
+
+@pytest.mark.parametrize("noise", [1e-300, 1e300])
+def test_crlb_and_the_sampler_refuse_a_noise_no_dolp_can_have(noise):
+    """1e-300 overflowed in the whitened squares (divide warnings), 1e300 in the margin ('margin must be
+    a non-negative float, got inf', naming an internal argument)."""
+    from scatterlab.inversion import crlb, sample_posterior
+
+    y = model_dolp(1.5, 0.1, 0.3, TI, TR)
+    with pytest.raises(
+        ValueError, match=r"noise must be a DOLP standard deviation in \[1e-12, 1\]"
+    ):
+        crlb(1.5, 0.1, 0.3, TI, TR, noise)
+    with pytest.raises(
+        ValueError, match=r"noise must be a DOLP standard deviation in \[1e-12, 1\]"
+    ):
+        sample_posterior(y, TI, TR, noise, 0, n_steps=20)
