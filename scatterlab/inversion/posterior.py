@@ -221,7 +221,8 @@ def effective_sample_size(chain: np.ndarray) -> np.ndarray:
         return np.full(P, np.nan)
     with warnings.catch_warnings(), np.errstate(invalid="ignore", divide="ignore"):
         warnings.simplefilter("ignore")
-        tau = emcee.autocorr.integrated_time(chain, tol=0)
+        with np.errstate(invalid="ignore", divide="ignore"):  # a constant chain: tau NaN, flagged
+            tau = emcee.autocorr.integrated_time(chain, tol=0)
     moving = np.ptp(chain.reshape(-1, P), axis=0) > 0
     return np.where(moving & (tau > 0), S * W / np.maximum(tau, 1e-300), np.nan)
 
@@ -924,7 +925,10 @@ def _run_ensembles(emcee, log_prob, ndim, starts, options, seeds, backends) -> l
                 )
         if fixed or min(s.iteration for s in samplers) >= target:
             return samplers
-        tau = np.array([s.get_autocorr_time(tol=0) for s in samplers])  # (E, D)
+        with np.errstate(
+            invalid="ignore", divide="ignore"
+        ):  # a constant chain: tau NaN, not converged
+            tau = np.array([s.get_autocorr_time(tol=0) for s in samplers])  # (E, D)
         steps = min(s.iteration for s in samplers)
         burn = int(min(np.ceil(2 * np.max(tau)), steps // 2))
         chain = np.concatenate(
@@ -1039,9 +1043,8 @@ def diagnose(
     """
     E = len(samplers)
     n_steps = min(s.iteration for s in samplers)
-    tau = np.max(
-        [s.get_autocorr_time(tol=0) for s in samplers], axis=0
-    )  # (D,), the slowest ensemble
+    with np.errstate(invalid="ignore", divide="ignore"):  # a walker set that never moved: NaN
+        tau = np.max([s.get_autocorr_time(tol=0) for s in samplers], axis=0)  # (D,), the slowest
     finite = np.isfinite(tau)
     # a NaN tau (a walker set that never moved) gives no burn-in estimate: discard half and say so
     tmax = float(np.max(tau[finite])) if finite.any() else float(n_steps)
