@@ -10,6 +10,7 @@ from scatterlab.deconvolution import (
     PRIOR_SETS,
     SuperGaussianPrior,
     blind_deconvolve,
+    classification_errors,
     classify_dolp,
     dolp_update,
     dolp_update_companion,
@@ -36,6 +37,8 @@ CASES = [
     (lambda: blind_deconvolve(GOOD, A, psf0=np.zeros((32, 32)), iterations=2), "psf0"),
     (lambda: blind_deconvolve(GOOD, A, psf0=-np.ones((32, 32)), iterations=2), "psf0"),
     (lambda: blind_deconvolve(GOOD, A, psf_radius=0, iterations=2), "psf_radius"),
+    (lambda: blind_deconvolve(GOOD, A, psf_radius=1e6, iterations=2), "psf_radius"),
+    (lambda: blind_deconvolve(GOOD, A, pad=-3, iterations=2), "pad"),
     (
         lambda: blind_deconvolve(
             GOOD, A, priors=PRIOR_SETS["ch5"], prior_weight=np.nan, iterations=2
@@ -55,6 +58,12 @@ CASES = [
     (lambda: imaging.otf(np.zeros((8, 8))), "positive sum"),
     (lambda: imaging.mtf(np.zeros((8, 8))), "positive sum"),
     (lambda: classify_dolp(np.array([0.5, np.nan]), PRIOR_SETS["ch5"]), "dolp must be finite"),
+    (
+        lambda: classification_errors(
+            np.zeros((4, 4), int), np.zeros((4, 4), int), mask=np.zeros((4, 4), bool)
+        ),
+        "mask",
+    ),
     (lambda: SuperGaussianPrior(1e40, 0.3), "c2"),
     (lambda: SuperGaussianPrior(3.0, 1.5), "c3"),
 ]

@@ -31,6 +31,11 @@ def classification_errors(estimate, truth, *, metal_classes=(1,), mask=None) -> 
     if e.shape != t.shape:
         raise ValueError(f"estimate {e.shape} and truth {t.shape} must have the same shape")
     sel = np.ones(e.shape, bool) if mask is None else np.asarray(mask, bool)
+    if sel.shape != e.shape or not sel.any():
+        raise ValueError(
+            f"mask must be a boolean array of shape {e.shape} selecting at least one pixel, got "
+            f"shape {sel.shape} with {int(sel.sum())} selected"
+        )
     e, t = e[sel], t[sel]
     n = e.size
     ef, tf = e.astype(float), t.astype(float)

@@ -427,8 +427,19 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
     weight = opts.polarization.prior_weight
     if not (np.isfinite(weight) and weight >= 0):
         raise ValueError(f"prior_weight must be finite and >= 0, got {weight!r}")
-    if radius is not None and not (np.isfinite(radius) and radius >= 1):
-        raise ValueError(f"psf_radius must be >= 1 pixel, got {radius!r}")
+    H, W = d.shape[1:]
+    if radius is not None and not (np.isfinite(radius) and 1 <= radius <= np.hypot(H, W)):
+        raise ValueError(
+            f"psf_radius must be in [1, {np.hypot(H, W):.4g}] pixels (the image's diagonal), got "
+            f"{radius!r}"
+        )
+    pad = opts.window.pad
+    if pad is not None and not (
+        isinstance(pad, (int, np.integer))
+        and not isinstance(pad, bool)
+        and 0 <= pad <= 2 * max(H, W)
+    ):
+        raise ValueError(f"pad must be an integer in [0, {2 * max(H, W)}] pixels, got {pad!r}")
     _check_start_and_stop(opts)
     if psf0 is not None:
         p0 = np.asarray(psf0, float)

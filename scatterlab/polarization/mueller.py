@@ -171,7 +171,13 @@ def apply(M, S) -> np.ndarray:
     ndarray, shape (..., 4)
         ``M @ S``.
     """
-    return np.einsum("...ij,...j->...i", np.asarray(M), np.asarray(S))
+    M, S = np.asarray(M), np.asarray(S)
+    if M.shape[-2:] != (4, 4) or S.shape[-1:] != (4,):
+        raise ValueError(
+            f"M must have shape (..., 4, 4) and S (..., 4) (Stokes axis last), got {M.shape} and "
+            f"{S.shape}"
+        )
+    return np.einsum("...ij,...j->...i", M, S)
 
 
 def _frame_rotation(angle) -> np.ndarray:

@@ -105,3 +105,9 @@ def test_infinite_stokes_entries_give_nan_not_a_number_that_looks_like_a_dolp():
         assert P.dolp([2.0, 1.0, 0.0, 0.0]) == 0.5
     with pytest.raises(ValueError, match="aop"):
         P.signed_dolp(np.array([1.0, 0.5, 0.0]), np.inf)
+
+
+def test_apply_needs_a_4x4_mueller_matrix_and_a_4_stokes_vector():
+    with pytest.raises(ValueError, match="M must have shape"):
+        P.apply(np.eye(3), [1.0, 0.0, 0.0])
+    np.testing.assert_allclose(P.apply(np.eye(4), [1.0, 0.5, 0.0, 0.0]), [1.0, 0.5, 0.0, 0.0])
