@@ -72,7 +72,7 @@ def test_crlb_scales_with_the_noise_and_rejects_bad_input():
     np.testing.assert_allclose(b2, 4 * b1, rtol=1e-12)
     with pytest.raises(ValueError, match="noise"):
         thilak_crlb(*COPPER, TR, TI10, 0.0)
-    with pytest.raises(ValueError, match="n and kappa"):
+    with pytest.raises(ValueError, match="n must be > 0"):
         thilak_crlb(-0.1, 3.0, TR, TI10, 1e-3)
     with pytest.raises(ValueError, match="theta_i"):
         thilak_crlb(*COPPER, TR, TI10[:2], 1e-3)
@@ -161,3 +161,30 @@ def test_step_two_start_is_honoured_and_validated():
         thilak_two_step(y, TI10, TR, np.random.default_rng(0), theta_r_start="fixed")
     with pytest.raises(ValueError, match="theta_r_start"):
         thilak_two_step(y, TI10, TR, np.random.default_rng(0), theta_r_start=2.0)
+
+
+def test_crlb_of_a_dielectric():
+    # kappa = 0 (glass): below the critical angle the Fresnel coefficients are real, so the DOP is
+    # stationary in kappa and kappa's bound is infinite. n's and theta_r's bounds are then those of
+    # the two-parameter problem, from a central-difference Jacobian of the test's own Eq. 115.
+    glass = thilak_crlb(1.5, 0.0, TR, TI10, 1e-3)
+    assert np.isinf(glass[1]) and np.all(np.isfinite(glass[[0, 2]]))
+
+    def dop(n, tr):
+        return _eq115(n, 0.0, (TI10 + tr) / 2)
+
+    h = 1e-6
+    J = np.stack(
+        [
+            (dop(1.5 + h, TR) - dop(1.5 - h, TR)) / (2 * h),
+            (dop(1.5, TR + h) - dop(1.5, TR - h)) / (2 * h),
+        ],
+        axis=1,
+    )
+    expected = np.sqrt(np.diag(np.linalg.inv(J.T @ J / 1e-3**2)))
+    np.testing.assert_allclose(glass[[0, 2]], expected, rtol=1e-5)
+    # a nearly lossless material: kappa's bound grows as 1/kappa, n's stays finite
+    b1, b2 = (thilak_crlb(1.5, k, TR, TI10, 1e-3) for k in (1e-4, 1e-6))
+    assert b2[1] == pytest.approx(100 * b1[1], rel=1e-3)
+    with pytest.raises(ValueError, match="kappa >= 0"):
+        thilak_crlb(1.5, -1e-3, TR, TI10, 1e-3)

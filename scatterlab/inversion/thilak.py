@@ -262,7 +262,10 @@ def thilak_crlb(n, kappa, theta_r, theta_i, noise, *, theta_r_known: bool = Fals
     Parameters
     ----------
     n, kappa : float
-        The truth, n > 0, kappa > 0.
+        The truth, n > 0, kappa >= 0. For a dielectric (kappa = 0, n > sin of every angle) the DOP is
+        stationary in kappa (the Fresnel coefficients are real there), so kappa gets an infinite
+        bound: a boundary truth, where no unbiased estimator exists; the bounds of the other
+        parameters are those with kappa known.
     theta_r : float [rad]
     theta_i : array (M,) [rad]
     noise : float
@@ -282,8 +285,10 @@ def thilak_crlb(n, kappa, theta_r, theta_i, noise, *, theta_r_known: bool = Fals
             )
     if not (np.isfinite(noise) and noise > 0):
         raise ValueError(f"noise must be a positive DOP standard deviation, got {noise}")
-    if not (n > 0 and kappa > 0):
-        raise ValueError(f"n and kappa must be > 0 (eta = n - 1j*kappa), got {n}, {kappa}")
+    if not (np.isfinite(n) and np.isfinite(kappa) and n > 0 and kappa >= 0):
+        raise ValueError(
+            f"n must be > 0 and kappa >= 0 (eta = n - 1j*kappa, finite), got {n}, {kappa}"
+        )
     ti = as_angle(theta_i, "theta_i").ravel()
     tr = float(as_angle(theta_r, "theta_r"))
     J = thilak_jacobian(n, kappa, (ti + tr) / 2) * np.array([1.0, 1.0, 0.5])  # dbeta/dtheta_r

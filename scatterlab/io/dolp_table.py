@@ -18,12 +18,11 @@ and underscores do not matter.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from scatterlab.io.table import angle_factor, format_table, read_table
+from scatterlab.io.table import angle_factor, format_table, read_table, warn_if_radians
 
 __all__ = ["DolpData", "read_dolp_table", "write_dolp_table"]
 
@@ -141,13 +140,7 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
                 f"{table.where(row)}, column {table.names[i]!r}: polar angle {table.values[row, i]} "
                 f"{angle_unit} is outside [0, 90] deg"
             )
-    if f != 1.0 and max(theta_i.max(), theta_r.max()) < np.radians(np.pi / 2):
-        warnings.warn(
-            f"{table.path}: every polar angle is below {np.pi / 2:.4f} deg: radians read as degrees? "
-            "(angle_unit='rad', or --angle-unit rad on the command line)",
-            UserWarning,
-            stacklevel=2,
-        )
+    warn_if_radians(table.path, (theta_i, theta_r), f, stacklevel=2)
     pi = col("phi", False)
     phi = np.full(theta_i.shape, np.pi) if pi is None else angles(pi)
     if pi is None:

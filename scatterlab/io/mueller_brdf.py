@@ -41,7 +41,6 @@ incidence). Elements: see :mod:`scatterlab.io.table`.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -57,6 +56,7 @@ from scatterlab.io.table import (
     length_factor,
     read_table,
     time_convention_flip,
+    warn_if_radians,
     wavelength_column,
 )
 
@@ -285,15 +285,7 @@ def _angles(table, columns, opt):
             )
         else:
             phi_i = table.values[:, pi_] * f
-    if f != 1.0 and max(np.abs(theta_i).max(), np.abs(theta_r).max()) < np.radians(
-        np.pi / 2 + 1e-9
-    ):
-        warnings.warn(
-            f"{table.path}: every polar angle is below {np.pi / 2:.4f} deg: radians read as degrees? "
-            "(angle_unit='rad', or --angle-unit rad on the command line)",
-            UserWarning,
-            stacklevel=3,
-        )
+    warn_if_radians(table.path, (theta_i, theta_r), f, stacklevel=3)
     for name, idx, v in (("theta_i", ti, theta_i), ("theta_r", tr, theta_r)):
         bad = np.abs(v) > np.pi / 2 + 1e-12
         if np.any(bad):

@@ -89,6 +89,37 @@ def angle_factor(unit: str, what: str = "angle_unit") -> float:
     return ANGLE_UNITS[_unit(unit, ANGLE_UNITS, what)]
 
 
+def warn_if_radians(path, polar, factor: float, stacklevel: int = 2) -> None:
+    """Warn when every polar angle of a file read in degrees is below pi/2 degrees.
+
+    Radians read as degrees look like that: a 90 deg incidence, written 1.5708, would be read as
+    1.57 deg. The reader carries on (a measurement at grazing-free tiny angles is possible).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file, for the message.
+    polar : sequence of ndarray
+        Polar angles as read [rad].
+    factor : float
+        The file's angle unit in rad (1.0 for radians: no warning).
+    stacklevel : int
+        ``warnings.warn``'s, counted from the reader that calls this.
+    """
+    import warnings
+
+    if factor == 1.0:
+        return
+    largest = max(float(np.max(np.abs(v))) for v in polar)
+    if largest < np.radians(np.pi / 2 + 1e-9):
+        warnings.warn(
+            f"{path}: every polar angle is below {np.pi / 2:.4f} deg: radians read as degrees? "
+            "(angle_unit='rad', or --angle-unit rad on the command line)",
+            UserWarning,
+            stacklevel=stacklevel + 1,
+        )
+
+
 def length_factor(unit: str, what: str = "wavelength_unit") -> float:
     """Metres per ``unit`` (``"m"``, ``"mm"``, ``"um"``, ``"nm"``).
 

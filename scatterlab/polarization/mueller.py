@@ -194,18 +194,29 @@ def _frame_rotation(angle) -> np.ndarray:
 def rotate_mueller(M, angle) -> np.ndarray:
     """Mueller matrix of element ``M`` rotated by ``angle`` [rad]: ``R(-a) M R(a)``.
 
+    The linear block ``(..., 3, 3)`` of a Mueller matrix (all that unpolarized light and linear
+    analyzers see) rotates with the linear block of the rotation: a rotation about the V axis never
+    mixes the circular row and column into it.
+
     Parameters
     ----------
-    M : array_like, shape ``(..., 4, 4)``
+    M : array_like, shape ``(..., 4, 4)`` or ``(..., 3, 3)``
+        Mueller matrices, or their linear blocks.
     angle : array_like [rad], from the s axis towards p.
 
     Returns
     -------
-    ndarray, shape (..., 4, 4)
-        The rotated Mueller matrix.
+    ndarray, shape of ``M`` broadcast against ``angle``
+        The rotated Mueller matrix (or linear block).
     """
-    R = _frame_rotation(angle)
-    return np.swapaxes(R, -1, -2) @ np.asarray(M) @ R
+    M = np.asarray(M)
+    if M.ndim < 2 or M.shape[-2:] not in ((4, 4), (3, 3)):
+        raise ValueError(
+            f"M must have shape (..., 4, 4) or, for the linear block, (..., 3, 3); got {M.shape}"
+        )
+    k = M.shape[-1]
+    R = _frame_rotation(angle)[..., :k, :k]
+    return np.swapaxes(R, -1, -2) @ M @ R
 
 
 def diattenuator(t_max=1.0, t_min=0.0, angle=0.0) -> np.ndarray:

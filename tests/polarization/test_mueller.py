@@ -189,3 +189,19 @@ def test_jones_kernel_blocks_and_diagonal_form_equal_the_kronecker_derivation():
         np.testing.assert_allclose(got, ref[:, : shape[0], : shape[1]], atol=1e-12)
     ref_d = np.array([kron_mueller(j * np.eye(2)) for j in J])
     np.testing.assert_allclose(mueller_from_jones_elements(a, None, None, d), ref_d, atol=1e-12)
+
+
+def test_rotate_mueller_linear_block():
+    # Malus: a horizontal polarizer rotated by a passes cos^2 a of horizontal light. The linear block
+    # (3x3) rotates like the full matrix and gives the same intensities.
+    a = np.radians([0.0, 20.0, 45.0, 90.0])
+    M4 = P.rotate_mueller(P.linear_polarizer(0.0), a)
+    M3 = P.rotate_mueller(P.linear_polarizer(0.0)[:3, :3], a)
+    assert M3.shape == (4, 3, 3)
+    np.testing.assert_allclose(M3, M4[..., :3, :3], atol=1e-15)
+    np.testing.assert_allclose((M3 @ [1.0, 1.0, 0.0])[:, 0], np.cos(a) ** 2, atol=1e-15)
+
+
+def test_rotate_mueller_refuses_other_shapes():
+    with pytest.raises(ValueError, match="M must have shape"):
+        P.rotate_mueller(np.eye(2), 0.1)

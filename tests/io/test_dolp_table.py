@@ -1,0 +1,36 @@
+"""The DOLP table reader: units, the radians-as-degrees warning and bad rows."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from scatterlab.io import read_dolp_table
+
+
+def _write(path, theta, dolp):
+    lines = ["theta,dolp"] + [f"{t},{d}" for t, d in zip(theta, dolp)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_radians_read_as_degrees_are_pointed_out(tmp_path):
+    # the same specular angles written in radians: read as degrees, every one is below pi/2 "deg"
+    theta = np.radians([30.0, 45.0, 60.0])
+    path = _write(tmp_path / "rad.csv", theta, [0.3, 0.5, 0.7])
+    with pytest.warns(UserWarning, match="radians read as degrees") as record:
+        data = read_dolp_table(path)
+    assert record[0].filename == __file__  # points at the caller, not the reader
+    np.testing.assert_allclose(data.theta_i, np.radians(theta))  # read as stated: degrees
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        data = read_dolp_table(path, angle_unit="rad")
+        read_dolp_table(_write(tmp_path / "deg.csv", [30, 45, 60], [0.3, 0.5, 0.7]))
+    np.testing.assert_allclose(data.theta_i, theta)
+    np.testing.assert_allclose(data.theta_r, theta)
+
+
+def test_polar_angles_beyond_90_deg_are_refused(tmp_path):
+    path = _write(tmp_path / "bad.csv", [30, 95], [0.3, 0.5])
+    with pytest.raises(ValueError, match=r"outside \[0, 90\] deg"):
+        read_dolp_table(path)
