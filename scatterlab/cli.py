@@ -197,6 +197,28 @@ def _analyze(args) -> int:
     )
 
 
+# the quantities whose column a user can name (--column KEY=NAME), as the readers' ``columns``
+MUELLER_COLUMNS = ("wavelength", "theta_i", "phi_i", "theta_r", "phi_r", "phi")
+DOLP_COLUMNS = ("theta", "theta_i", "theta_r", "phi", "dolp", "std")
+
+
+def _columns(pairs, keys) -> dict | None:
+    """``--column KEY=NAME`` options as a reader's ``columns`` mapping (ValueError naming the option)."""
+    if not pairs:
+        return None
+    out = {}
+    for pair in pairs:
+        key, eq, name = pair.partition("=")
+        key, name = key.strip(), name.strip()
+        if not eq or not name or key not in keys:
+            raise ValueError(
+                f"--column must be KEY=NAME with KEY one of {', '.join(keys)} and NAME a column of "
+                f"the file, got {pair!r}"
+            )
+        out[key] = name
+    return out
+
+
 def _fit_mueller(args) -> int:
     import time
 
@@ -209,6 +231,7 @@ def _fit_mueller(args) -> int:
     try:
         data = read_mueller_brdf(
             args.file,
+            _columns(args.column, MUELLER_COLUMNS),
             angle_unit=args.angle_unit,
             wavelength_unit=args.wavelength_unit,
             time_convention=args.time_convention,
@@ -287,7 +310,9 @@ def _fit_dolp(args) -> int:
             raise ValueError(f"--sigma must be a known rms slope in [0.001, 2.5], got {args.sigma}")
         if args.noise is not None and not (np.isfinite(args.noise) and args.noise > 0):
             raise ValueError(f"--noise must be a DOLP standard deviation > 0, got {args.noise}")
-        data = read_dolp_table(args.file, angle_unit=args.angle_unit)
+        data = read_dolp_table(
+            args.file, _columns(args.column, DOLP_COLUMNS), angle_unit=args.angle_unit
+        )
         # the error: --noise, else the file's per-row std (a diagonal covariance), else inferred
         noise = args.noise
         cov = np.diag(data.std**2) if noise is None and data.std is not None else None
@@ -359,6 +384,13 @@ def _add_fit_dolp(sub):
         help="MCMC chain length (default: run until converged)",
     )
     fd.add_argument("--seed", type=int, default=20101210, help="random seed (default 20101210)")
+    fd.add_argument(
+        "--column",
+        action="append",
+        default=[],
+        metavar="KEY=NAME",
+        help="the file's column NAME holds quantity KEY (theta, theta_i, theta_r, phi, dolp, std); repeatable",
+    )
 
 
 def _add_fit_mueller(sub):
@@ -405,6 +437,13 @@ def _add_fit_mueller(sub):
         "--posterior-steps", type=int, default=0, help="emcee steps per walker (0: no posterior)"
     )
     fm.add_argument("--seed", type=int, default=20101210, help="seed of the posterior sampler")
+    fm.add_argument(
+        "--column",
+        action="append",
+        default=[],
+        metavar="KEY=NAME",
+        help="the file's column NAME holds quantity KEY (wavelength, theta_i, phi_i, theta_r, phi_r, phi); repeatable",
+    )
     fm.add_argument("--force", action="store_true", help="replace an existing report")
 
 

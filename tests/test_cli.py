@@ -232,3 +232,22 @@ def test_fit_dolp_bad_tables_are_one_line_errors(tmp_path, capsys):
         assert message in err and "Traceback" not in err, err
     assert main(["fit-dolp", cases[0][0], "--sigma", "-1", "--out", str(tmp_path / "o")]) == 2
     assert "--sigma must be" in capsys.readouterr().err
+
+
+def test_fit_dolp_column_names_a_users_column(tmp_path, capsys):
+    """A column the reader does not recognise: the error names --column, and with it the fit runs."""
+    import numpy as np
+
+    from scatterlab.inversion import model_dolp
+
+    th = np.arange(20.0, 71.0, 10.0)
+    d = model_dolp(1.5, 0.1, 0.3, np.radians(th), np.radians(th))
+    path = _dolp_table(tmp_path / "p.csv", "aoi,p_measured", np.c_[th, d])
+    argv = ["fit-dolp", path, "--out", str(tmp_path / "o"), "--sigma", "0.3", "--noise", "0.01"]
+    assert main(argv) == 2
+    assert "--column dolp=NAME" in capsys.readouterr().err
+    assert main([*argv, "--column", "dolp = p_measured", "--posterior-steps", "200"]) == 0
+    assert "n = " in capsys.readouterr().out
+    assert main([*argv, "--column", "dolp:p_measured"]) == 2
+    err = capsys.readouterr().err
+    assert "--column must be KEY=NAME" in err and "Traceback" not in err

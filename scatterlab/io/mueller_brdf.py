@@ -266,7 +266,7 @@ def _angles(table, columns, opt):
     if pr is None and ph is None:
         raise ValueError(
             f"{table.path}: missing column for the observation azimuth (phir, phis or a relative "
-            f"phi; map yours with columns={{'phi_r': NAME}})"
+            f"phi; map yours with columns={{'phi_r': NAME}}, --column phi_r=NAME on the command line)"
         )
     if pr is not None and pi_ is None and ph is not None:
         pi_, ph = ph, None  # the "phii or phi": phi beside phir is the incident azimuth

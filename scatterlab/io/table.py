@@ -373,14 +373,16 @@ class Table:
         if len(hits) > 1:
             raise ValueError(
                 f"{self.path}: columns {[self.names[i] for i in hits]} all name {what}; "
-                f"choose one with columns={{{what!r}: NAME}}"
+                f"choose one with columns={{{what!r}: NAME}} (--column {what}=NAME on the command "
+                "line)"
             )
         if not hits:
             if required:
                 raise ValueError(
                     f"{self.path}: missing column for {what} (looked for "
                     f"{', '.join(sorted(aliases))};"
-                    f" columns: {', '.join(self.names)}; map yours with columns={{{what!r}: NAME}})"
+                    f" columns: {', '.join(self.names)}; map yours with columns={{{what!r}: NAME}},"
+                    f" --column {what}=NAME on the command line)"
                 )
             return None
         return hits[0]

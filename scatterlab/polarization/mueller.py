@@ -381,6 +381,8 @@ def mueller_from_coherency(H) -> np.ndarray:
         Real Mueller matrix.
     """
     H = np.asarray(H, complex)
+    if H.ndim < 2 or H.shape[-2:] != (4, 4):
+        raise ValueError(f"H must have shape (..., 4, 4) (a 4x4 coherency matrix), got {H.shape}")
     return np.einsum("ijab,...ab->...ij", _BASIS.conj(), H).real
 
 

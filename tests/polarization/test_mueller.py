@@ -205,3 +205,8 @@ def test_rotate_mueller_linear_block():
 def test_rotate_mueller_refuses_other_shapes():
     with pytest.raises(ValueError, match="M must have shape"):
         P.rotate_mueller(np.eye(2), 0.1)
+
+
+def test_mueller_from_coherency_refuses_other_shapes():
+    with pytest.raises(ValueError, match=r"H must have shape \(\.\.\., 4, 4\)"):
+        P.mueller_from_coherency(np.eye(3))
