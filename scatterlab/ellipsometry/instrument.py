@@ -23,6 +23,7 @@ radians; matrices ``(4, 4)``; intensities in arbitrary units.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -266,6 +267,20 @@ class Instrument:
                     f"got rank {rank}: M = A^-1 B W^-1 is then not determined"
                 )
             setattr(self, nm, X)
+        # physical states: a PSG column is a Stokes vector, a PSA row an analysis vector, both with
+        # |(x1, x2, x3)| <= x0. Otherwise a physical sample can give negative intensities.
+        for nm, states in (("W", self.W.T), ("A", self.A)):
+            excess = np.linalg.norm(states[:, 1:], axis=1) - states[:, 0]
+            worst = int(np.argmax(excess))
+            if excess[worst] > 1e-9 * np.max(np.abs(states[:, 0])):
+                what = "column" if nm == "W" else "row"
+                warnings.warn(
+                    f"{nm} {what} {worst} is not a physical polarization state (its polarized part "
+                    f"exceeds its intensity by {excess[worst]:.3g}): intensities A M W of a physical "
+                    "sample can be negative",
+                    UserWarning,
+                    stacklevel=3,
+                )
 
     @property
     def condition_numbers(self) -> tuple[float, float]:
@@ -274,6 +289,10 @@ class Instrument:
 
     def intensities(self, M) -> np.ndarray:
         """Noise-free intensities ``B = A M W``.
+
+        Non-negative for a physical ``M`` (see
+        :func:`scatterlab.polarization.is_physical_mueller`) and physical states (the class warns
+        otherwise); an unphysical ``M`` can give negative intensities, as it would in no experiment.
 
         Parameters
         ----------

@@ -689,3 +689,42 @@ def test_a_contraction_at_or_below_zero_is_printed_as_none():
         "0.05",
         "0.71",
     ]
+
+
+def test_s0_error_is_blind_to_each_geometrys_exposure():
+    """Each geometry is exposed for its own brightest pixel while the truth's radiance changes with the
+    geometry: an image equal to the truth up to one exposure per geometry has no S0 error. A real error
+    (a blurred edge) is still seen, and only on the edges."""
+    from types import SimpleNamespace
+
+    from scipy import ndimage
+
+    from scatterlab.characterization.metrics import _image_errors
+
+    labels = np.zeros((32, 32), int)
+    labels[:, 16:] = 1
+    truth = np.where(labels == 1, 1.0, 0.07)
+    sel = interior(labels.shape, 2)
+    away = ndimage.binary_erosion(labels == 1, iterations=3) | ndimage.binary_erosion(
+        labels == 0, iterations=3
+    )
+
+    def obs(exposure, scale, blur):
+        t = truth * scale
+        img = ndimage.uniform_filter(t, blur) if blur else t
+        im = SimpleNamespace(s0=exposure * img, dolp=np.full_like(t, 0.5))
+        return SimpleNamespace(
+            truth_s0=t,
+            truth_dolp=np.full_like(t, 0.5),
+            images={("no_turbulence", "restored"): im, ("case", "kind"): im},
+        )
+
+    # the truth three times brighter at the second geometry, the exposures 2e5 and 7e4
+    exact = [obs(2e5, 1.0, 0), obs(7e4, 3.0, 0)]
+    e = _image_errors(exact, "case", "kind", sel, away=away)
+    assert e["s0_relative_rmse_truth"] == pytest.approx(0.0, abs=1e-12)
+    assert e["s0_relative_rmse_truth_away_from_edges"] == pytest.approx(0.0, abs=1e-12)
+    blurred = [obs(2e5, 1.0, 3), obs(7e4, 3.0, 3)]
+    e = _image_errors(blurred, "case", "kind", sel, away=away)
+    assert e["s0_relative_rmse_truth"] > 0.05
+    assert e["s0_relative_rmse_truth_away_from_edges"] < 1e-3 * e["s0_relative_rmse_truth"]

@@ -106,7 +106,8 @@ def test_bad_inputs(instrument):
 def test_ill_conditioned_instrument_warns():
     W = np.diag([1.0, 1, 1, 0.001]) + 0.0
     W[0] = 1.0
-    inst = Instrument(W, np.eye(4) + 0.1)
+    with pytest.warns(UserWarning, match="not a physical polarization state"):
+        inst = Instrument(W, np.eye(4) + 0.1)  # an ill-conditioned, unphysical PSA
     B0 = inst.intensities(np.eye(4))
     refs = [
         ("polarizer", inst.intensities(m), a)

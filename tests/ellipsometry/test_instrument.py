@@ -51,5 +51,25 @@ def test_measurement_model_and_noise_statistics():
 def test_bad_instrument_input():
     with pytest.raises(ValueError, match="W"):
         Instrument(np.ones((3, 3)), np.eye(4))
+    inst = Instrument(switched_wave_plate_psg(), switched_wave_plate_psa())
     with pytest.raises(ValueError, match="repeats"):
-        Instrument(np.eye(4), np.eye(4)).measure(np.eye(4), repeats=0)
+        inst.measure(np.eye(4), repeats=0)
+
+
+def test_unphysical_states_are_pointed_out_and_physical_ones_give_no_negative_intensity(rng):
+    """The identity as PSG has columns (0, 1, 0, 0), ...: a polarized part without intensity. A
+    physical instrument and sample never give a negative reading; that instrument does, and is named."""
+    import warnings
+
+    from scatterlab.polarization import diattenuator
+
+    with pytest.warns(UserWarning, match="W column 1 is not a physical polarization state"):
+        bad = Instrument(np.eye(4), switched_wave_plate_psa())
+    M = diattenuator(1.0, 0.0, np.pi / 2)  # a vertical polarizer
+    assert bad.intensities(M).min() < 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        good = Instrument(switched_wave_plate_psg(), switched_wave_plate_psa())
+    for angle in rng.uniform(0, np.pi, 20):
+        for M in (diattenuator(1.0, 0.0, angle), linear_retarder(angle, 2 * angle) * 0.9):
+            assert good.intensities(M).min() >= -1e-12
