@@ -11,6 +11,7 @@
                      [--psf-refine none|layout]
     scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--time-convention exp(-iwt)]
     scatterlab fit-dolp FILE.csv [--out DIR] [--sigma S] [--noise N] [--angle-unit rad]
+    scatterlab fit-ellipsometry FILE.csv [--out DIR] [--sigma S] [--time-convention exp(-iwt)]
 
 Sweeps inside studies use ``--workers N`` local processes or a Dask cluster
 given by ``--scheduler ADDRESS``.
@@ -101,6 +102,8 @@ commands:
   analyze        restore, classify and invert measured polarimetric channel images (a dataset) end to end
   fit-mueller    fit n, kappa, sigma of the pBRDF to a measured Mueller BRDF table (CSV) and report
   fit-dolp       posterior of n, kappa (and sigma) from measured DOLP against geometry (CSV) and report
+  fit-ellipsometry
+                 fit n, kappa, sigma to in-plane Mueller ellipsometry (m12, m22, m33, m34 vs angle)
 
 Run `scatterlab COMMAND --help` for a command's options. Angles are in degrees on the command line
 and in files, radians in the Python API.
@@ -200,6 +203,7 @@ def _analyze(args) -> int:
 # the quantities whose column a user can name (--column KEY=NAME), as the readers' ``columns``
 MUELLER_COLUMNS = ("wavelength", "theta_i", "phi_i", "theta_r", "phi_r", "phi")
 DOLP_COLUMNS = ("theta", "theta_i", "theta_r", "phi", "dolp", "std")
+ELLIPSOMETRY_COLUMNS = ("theta", "wavelength")
 
 
 def _columns(pairs, keys) -> dict | None:
@@ -393,6 +397,31 @@ def _add_fit_dolp(sub):
     )
 
 
+def _add_file_and_model_options(parser, flip: str, wavelength: str) -> None:
+    """The fit commands' file units and time convention, and the pBRDF's model options."""
+    parser.add_argument(
+        "--angle-unit", default="deg", choices=["deg", "rad"], help="unit of the angle columns"
+    )
+    parser.add_argument(
+        "--wavelength-unit", default="um", choices=["um", "nm", "mm", "m"], help=wavelength
+    )
+    parser.add_argument(
+        "--time-convention",
+        default="exp(+jwt)",
+        choices=["exp(+jwt)", "exp(-iwt)"],
+        help=f"the file's time convention ({flip})",
+    )
+    parser.add_argument(
+        "--shadowing", default="torrance-sparrow", help="pBRDF shadowing (torrance-sparrow, none)"
+    )
+    parser.add_argument(
+        "--diffuse",
+        default="hyde",
+        choices=["hyde", "reciprocal", "none"],
+        help="pBRDF diffuse term",
+    )
+
+
 def _add_fit_mueller(sub):
     fm = sub.add_parser(
         "fit-mueller",
@@ -409,29 +438,8 @@ def _add_fit_mueller(sub):
         default=None,
         help="wavelength to fit when the file has several",
     )
-    fm.add_argument(
-        "--angle-unit", default="deg", choices=["deg", "rad"], help="unit of the angle columns"
-    )
-    fm.add_argument(
-        "--wavelength-unit",
-        default="um",
-        choices=["um", "nm", "mm", "m"],
-        help="unit of the wavelength column",
-    )
-    fm.add_argument(
-        "--time-convention",
-        default="exp(+jwt)",
-        choices=["exp(+jwt)", "exp(-iwt)"],
-        help="the file's time convention (exp(-iwt): NIST SCATMECH; flips the circular elements)",
-    )
-    fm.add_argument(
-        "--shadowing", default="torrance-sparrow", help="pBRDF shadowing (torrance-sparrow, none)"
-    )
-    fm.add_argument(
-        "--diffuse",
-        default="hyde",
-        choices=["hyde", "reciprocal", "none"],
-        help="pBRDF diffuse term",
+    _add_file_and_model_options(
+        fm, "exp(-iwt): NIST SCATMECH; flips the circular elements", "unit of the wavelength column"
     )
     fm.add_argument(
         "--posterior-steps", type=int, default=0, help="emcee steps per walker (0: no posterior)"
@@ -445,6 +453,87 @@ def _add_fit_mueller(sub):
         help="the file's column NAME holds quantity KEY (wavelength, theta_i, phi_i, theta_r, phi_r, phi); repeatable",
     )
     fm.add_argument("--force", action="store_true", help="replace an existing report")
+
+
+def _add_fit_ellipsometry(sub):
+    fe = sub.add_parser(
+        "fit-ellipsometry",
+        help="fit n, kappa, sigma of the pBRDF to in-plane Mueller ellipsometry (CSV) and report",
+        description="Fit n, kappa and sigma of the pBRDF to in-plane Mueller ellipsometry: one row "
+        "per specular angle (theta_i = theta_r) with the normalised elements m12, m22, m33, m34 "
+        "(1-based names; M01, M11, M22, M23 over M00) and optionally their std_ columns; angles in "
+        "degrees. Writes elements_vs_angle.png, metrics.json and report.md.",
+    )
+    fe.add_argument("file", help="CSV table of normalised elements against the specular angle")
+    fe.add_argument("--out", default="results/fit-ellipsometry", help="output folder")
+    fe.add_argument("--force", action="store_true", help="replace an existing report")
+    _add_file_and_model_options(
+        fe, "exp(-iwt) flips the sign of m34", "unit of the wavelength column, if any"
+    )
+    fe.add_argument(
+        "--sigma", type=float, default=None, help="known roughness (rms slope); default: fitted"
+    )
+    fe.add_argument(
+        "--column",
+        action="append",
+        default=[],
+        metavar="KEY=NAME",
+        help="the file's column NAME holds quantity KEY (theta, wavelength); repeatable",
+    )
+
+
+def _fit_ellipsometry(args) -> int:
+    import time
+
+    from scatterlab.ellipsometry import fit_mueller_elements
+    from scatterlab.ellipsometry.in_plane_report import write_in_plane_report
+    from scatterlab.io import read_ellipsometry
+
+    try:
+        if args.sigma is not None and not 1e-3 <= args.sigma <= 1.5:
+            raise ValueError(f"--sigma must be a known rms slope in [0.001, 1.5], got {args.sigma}")
+        data = read_ellipsometry(
+            args.file,
+            _columns(args.column, ELLIPSOMETRY_COLUMNS),
+            angle_unit=args.angle_unit,
+            wavelength_unit=args.wavelength_unit,
+            time_convention=args.time_convention,
+        )
+        t0 = time.perf_counter()
+        fit = fit_mueller_elements(
+            data.theta,
+            data.elements,
+            std=data.std,
+            sigma=args.sigma,
+            fit_sigma=args.sigma is None,
+            shadowing=args.shadowing,
+            diffuse=args.diffuse,
+        )
+        report = write_in_plane_report(
+            data,
+            fit,
+            args.out,
+            source=args.file,
+            convention=args.time_convention,
+            seconds=time.perf_counter() - t0,
+            shadowing=args.shadowing,
+            diffuse=args.diffuse,
+            overwrite=args.force,
+        )
+    except (ValueError, FileExistsError, FileNotFoundError) as exc:
+        print(f"scatterlab: {_message(exc)}", file=sys.stderr)
+        return 2
+    e = fit.errors
+    sigma = f"{fit.sigma:.4g} +- {e[2]:.2g}" if args.sigma is None else f"{fit.sigma:.4g} (known)"
+    print(f"n = {fit.n:.5g} +- {e[0]:.2g}, kappa = {fit.kappa:.5g} +- {e[1]:.2g}, sigma = {sigma}")
+    if not fit.success:
+        print(
+            "scatterlab: warning: the fit did not converge: these numbers are not an estimate "
+            "(check the angle unit, --angle-unit, and the time convention)",
+            file=sys.stderr,
+        )
+    print(f"report: {report}")
+    return 0
 
 
 def main(argv=None) -> int:
@@ -501,6 +590,7 @@ def main(argv=None) -> int:
     ch.add_argument("--scheduler", default=None, help="Dask scheduler address")
     _add_fit_mueller(sub)
     _add_fit_dolp(sub)
+    _add_fit_ellipsometry(sub)
     an = sub.add_parser(
         "analyze", help="restore, classify and invert measured channel images (no simulation)"
     )
@@ -571,6 +661,7 @@ def main(argv=None) -> int:
         "characterize": _characterize,
         "fit-mueller": _fit_mueller,
         "fit-dolp": _fit_dolp,
+        "fit-ellipsometry": _fit_ellipsometry,
     }
     with warnings.catch_warnings():  # a warning is a line for the user, not a source listing
         warnings.showwarning = _show_warning

@@ -43,7 +43,7 @@ def test_help_says_what_the_tool_does_and_lists_each_command(capsys):
     assert exc.value.code == 0
     out = capsys.readouterr().out
     assert "polarimetric light scattering" in out
-    for command in ("study", "characterize", "fit-mueller"):
+    for command in ("study", "characterize", "fit-mueller", "fit-dolp"):
         lines = [ln for ln in out.splitlines() if ln.strip().startswith(command + " ")]
         assert len(lines) == 1, command
 
@@ -251,3 +251,50 @@ def test_fit_dolp_column_names_a_users_column(tmp_path, capsys):
     assert main([*argv, "--column", "dolp:p_measured"]) == 2
     err = capsys.readouterr().err
     assert "--column must be KEY=NAME" in err and "Traceback" not in err
+
+
+def test_fit_ellipsometry_recovers_the_example_and_reports(tmp_path, capsys):
+    """The bundled in-plane example (simulated aluminium, 1.226 - j10.413, sigma 0.43, element noise
+    0.002): the fit's 2-sigma intervals hold the truth; the wrong time convention is told in the report."""
+    import json
+    from pathlib import Path
+
+    example = Path(__file__).parents[1] / "data" / "examples" / "ellipsometry_in_plane.csv"
+    out = tmp_path / "o"
+    assert main(["fit-ellipsometry", str(example), "--out", str(out)]) == 0
+    assert "n = " in capsys.readouterr().out
+    m = json.loads((out / "metrics.json").read_text())
+    for name, truth, err in zip(("n", "kappa", "sigma"), (1.226, 10.413, 0.43), m["errors_1sigma"]):
+        assert abs(m[name] - truth) <= 2 * err, (name, m[name], err)
+    assert m["goodness"] < 2 and m["success"]
+    assert (out / "elements_vs_angle.png").stat().st_size > 0
+    assert "does not fit" not in (out / "report.md").read_text()
+    # the other time convention flips m34: no fit within the errors, and the report says so
+    argv = ["fit-ellipsometry", str(example), "--out", str(out), "--force"]
+    assert main([*argv, "--time-convention", "exp(-iwt)"]) == 0
+    assert "does not fit these data within their errors" in (out / "report.md").read_text()
+    assert main(argv[:-1]) == 2  # without --force the report is kept
+    assert "exists" in capsys.readouterr().err
+    # known roughness: sigma held, no error stated for it
+    assert main([*argv, "--sigma", "0.43"]) == 0
+    assert "sigma = 0.43 (known)" in capsys.readouterr().out
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["sigma"] == 0.43 and m["errors_1sigma"][2] == 0
+    assert abs(m["n"] - 1.226) <= 2 * m["errors_1sigma"][0]
+    assert main([*argv, "--sigma", "3"]) == 2
+    assert "--sigma must be" in capsys.readouterr().err
+
+
+def test_fit_ellipsometry_column_and_bad_file(tmp_path, capsys):
+    from pathlib import Path
+
+    example = Path(__file__).parents[1] / "data" / "examples" / "ellipsometry_in_plane.csv"
+    text = example.read_text().replace("theta,m12", "incidence_angle,m12")
+    (tmp_path / "e.csv").write_text(text)
+    argv = ["fit-ellipsometry", str(tmp_path / "e.csv"), "--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "--column theta=NAME" in err and "Traceback" not in err
+    assert main([*argv, "--column", "theta=incidence_angle"]) == 0
+    assert main(["fit-ellipsometry", str(tmp_path / "none.csv")]) == 2
+    assert "no such file" in capsys.readouterr().err

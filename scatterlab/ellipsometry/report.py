@@ -234,6 +234,50 @@ def _depolarization_section(dep: dict) -> list[str]:
     ]
 
 
+def report_folder(out, overwrite: bool) -> tuple[Path, Path]:
+    """The output folder (created) and its ``report.md``; FileExistsError if that exists unless
+    ``overwrite``.
+
+    Parameters
+    ----------
+    out : str or Path
+        Output folder.
+    overwrite : bool
+        Replace an existing report.
+
+    Returns
+    -------
+    tuple of Path
+        ``(out, out / "report.md")``.
+    """
+    out = Path(out)
+    report = out / "report.md"
+    if report.exists() and not overwrite:
+        raise FileExistsError(f"{report} exists; pass overwrite=True (CLI: --force)")
+    out.mkdir(parents=True, exist_ok=True)
+    return out, report
+
+
+def versions() -> dict:
+    """Versions of scatterlab, numpy, scipy and Python, for a report's metrics.
+
+    Returns
+    -------
+    dict
+        Package name -> version string.
+    """
+    import scipy
+
+    import scatterlab
+
+    return {
+        "scatterlab": getattr(scatterlab, "__version__", "unknown"),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "python": platform.python_version(),
+    }
+
+
 def write_fit_report(
     data, fit, out, *, source="", convention="exp(+jwt)", seconds=0.0, overwrite: bool = False
 ) -> Path:
@@ -260,16 +304,9 @@ def write_fit_report(
     Path
         ``report.md``.
     """
-    import scipy
-
-    import scatterlab
     from scatterlab.runtime.results import write_json, write_text
 
-    out = Path(out)
-    report = out / "report.md"
-    if report.exists() and not overwrite:
-        raise FileExistsError(f"{report} exists; pass overwrite=True (CLI: --force)")
-    out.mkdir(parents=True, exist_ok=True)
+    out, report = report_folder(out, overwrite)
     plot_elements(data, fit, out / "elements.png")
     plot_residuals(fit, out / "residuals.png")
     metrics = {
@@ -279,12 +316,7 @@ def write_fit_report(
         "fit": fit.summary(),
         "run_time_s": seconds,
         "notes": list(data.notes),
-        "versions": {
-            "scatterlab": getattr(scatterlab, "__version__", "unknown"),
-            "numpy": np.__version__,
-            "scipy": scipy.__version__,
-            "python": platform.python_version(),
-        },
+        "versions": versions(),
     }
     write_json(out / "metrics.json", metrics, overwrite=True)
     return write_text(report, _markdown(data, fit, source, convention, seconds), overwrite=True)

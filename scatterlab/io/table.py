@@ -105,6 +105,11 @@ def warn_if_radians(path, polar, factor: float, stacklevel: int = 2) -> None:
         The file's angle unit in rad (1.0 for radians: no warning).
     stacklevel : int
         ``warnings.warn``'s, counted from the reader that calls this.
+
+    Returns
+    -------
+    None
+        Warns (``UserWarning``) or does nothing.
     """
     import warnings
 
