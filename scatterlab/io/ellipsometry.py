@@ -33,6 +33,7 @@ from scatterlab.io.table import (
     length_factor,
     read_table,
     time_convention_flip,
+    warn_if_radians,
     wavelength_column,
 )
 
@@ -142,6 +143,7 @@ def read_ellipsometry(
             f"{table.where(row)}, column {table.names[ai]!r}: angle {table.values[row, ai]} "
             f"{angle_unit} is outside [0, 90] deg"
         )
+    warn_if_radians(table.path, (theta,), opt.angle, stacklevel=2)
     wavelength = _wavelength(table, columns, opt.length)
     E, S = _elements(table, theta.size, opt.tolerance)
     notes = []

@@ -1,4 +1,4 @@
-"""The DOLP table reader: units, the radians-as-degrees warning and bad rows."""
+"""The DOLP and ellipsometry table readers: units, the radians-as-degrees warning and bad rows."""
 
 import warnings
 
@@ -34,3 +34,16 @@ def test_polar_angles_beyond_90_deg_are_refused(tmp_path):
     path = _write(tmp_path / "bad.csv", [30, 95], [0.3, 0.5])
     with pytest.raises(ValueError, match=r"outside \[0, 90\] deg"):
         read_dolp_table(path)
+
+
+def test_ellipsometry_in_radians_read_as_degrees_is_pointed_out(tmp_path):
+    from scatterlab.io import read_ellipsometry
+
+    path = tmp_path / "e.csv"
+    path.write_text("theta,m12,m22,m33,m34\n0.5,0.1,0.9,0.8,0.1\n0.7,0.1,0.9,0.8,0.1\n")
+    with pytest.warns(UserWarning, match="radians read as degrees"):
+        read_ellipsometry(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        data = read_ellipsometry(path, angle_unit="rad")
+    np.testing.assert_allclose(data.theta, [0.5, 0.7])
