@@ -526,14 +526,50 @@ def _fit_ellipsometry(args) -> int:
     e = fit.errors
     sigma = f"{fit.sigma:.4g} +- {e[2]:.2g}" if args.sigma is None else f"{fit.sigma:.4g} (known)"
     print(f"n = {fit.n:.5g} +- {e[0]:.2g}, kappa = {fit.kappa:.5g} +- {e[1]:.2g}, sigma = {sigma}")
-    if not fit.success:
-        print(
-            "scatterlab: warning: the fit did not converge: these numbers are not an estimate "
-            "(check the angle unit, --angle-unit, and the time convention)",
-            file=sys.stderr,
-        )
+    for line in _ellipsometry_warnings(data, fit, args):
+        print(f"scatterlab: warning: {line}", file=sys.stderr)
     print(f"report: {report}")
     return 0
+
+
+def _ellipsometry_warnings(data, fit, args) -> list:
+    """What a user must know about an in-plane fit before using its numbers (bounds, misfit, convention)."""
+    import numpy as np
+
+    from scatterlab.ellipsometry import fit_mueller_elements
+    from scatterlab.ellipsometry.in_plane_report import goodness
+
+    out = []
+    if not fit.success:
+        out.append(
+            "the fit did not converge: these numbers are not an estimate (check the angle unit, "
+            "--angle-unit, and the time convention)"
+        )
+    # fit_mueller_elements' default bounds (kappa = 0, a dielectric, is a physical value, not flagged)
+    for name, v, bounds in (("n", fit.n, (0.01, 10.0)), ("kappa", fit.kappa, (30.0,))):
+        if any(np.isclose(v, b, rtol=1e-6, atol=0) for b in bounds):
+            out.append(f"{name} = {v:.4g} is a bound of the fit, not an estimate")
+    stat, _, _ = goodness(data, fit)
+    if data.std is not None and stat > 4:
+        out.append(
+            f"the model does not fit within the stated errors (reduced chi^2 {stat:.3g}): the "
+            "errors are too small to trust (report.md says why)"
+        )
+    flipped = fit_mueller_elements(
+        data.theta,
+        data.elements * np.array([1, 1, 1, -1]),
+        std=data.std,
+        sigma=args.sigma,
+        fit_sigma=args.sigma is None,
+        shadowing=args.shadowing,
+        diffuse=args.diffuse,
+    )
+    if flipped.cost < 0.25 * fit.cost:
+        out.append(
+            f"the data fit {fit.cost / max(flipped.cost, 1e-300):.3g} times better with m34's sign "
+            "flipped: the file is probably in the other time convention (--time-convention)"
+        )
+    return out
 
 
 def main(argv=None) -> int:

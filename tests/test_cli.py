@@ -262,7 +262,8 @@ def test_fit_ellipsometry_recovers_the_example_and_reports(tmp_path, capsys):
     example = Path(__file__).parents[1] / "data" / "examples" / "ellipsometry_in_plane.csv"
     out = tmp_path / "o"
     assert main(["fit-ellipsometry", str(example), "--out", str(out)]) == 0
-    assert "n = " in capsys.readouterr().out
+    printed = capsys.readouterr()
+    assert "n = " in printed.out and "warning" not in printed.err, printed.err
     m = json.loads((out / "metrics.json").read_text())
     for name, truth, err in zip(("n", "kappa", "sigma"), (1.226, 10.413, 0.43), m["errors_1sigma"]):
         assert abs(m[name] - truth) <= 2 * err, (name, m[name], err)
@@ -273,6 +274,9 @@ def test_fit_ellipsometry_recovers_the_example_and_reports(tmp_path, capsys):
     argv = ["fit-ellipsometry", str(example), "--out", str(out), "--force"]
     assert main([*argv, "--time-convention", "exp(-iwt)"]) == 0
     assert "does not fit these data within their errors" in (out / "report.md").read_text()
+    err = capsys.readouterr().err
+    assert "other time convention (--time-convention)" in err, err
+    assert "does not fit within the stated errors" in err
     assert main(argv[:-1]) == 2  # without --force the report is kept
     assert "exists" in capsys.readouterr().err
     # known roughness: sigma held, no error stated for it

@@ -61,7 +61,19 @@ def plot_in_plane(data, fit, path, *, shadowing="torrance-sparrow", diffuse="hyd
     return Path(path)
 
 
-def _goodness(data, fit) -> tuple[float, int, str]:
+def goodness(data, fit) -> tuple[float, int, str]:
+    """Reduced chi^2 (weighted data) or mean square residual, its degrees of freedom and a sentence.
+
+    Parameters
+    ----------
+    data : scatterlab.io.EllipsometryData
+    fit : MuellerFit
+
+    Returns
+    -------
+    tuple
+        ``(statistic, degrees of freedom, sentence)``.
+    """
     dof = max(1, fit.residuals.size - (3 if fit.errors[2] > 0 else 2))
     stat = float(np.sum(fit.residuals**2) / dof)
     if data.std is not None:
@@ -119,7 +131,7 @@ def write_in_plane_report(
 
     out, report = report_folder(out, overwrite)
     plot_in_plane(data, fit, out / "elements_vs_angle.png", shadowing=shadowing, diffuse=diffuse)
-    stat, dof, goodness = _goodness(data, fit)
+    stat, dof, sentence = goodness(data, fit)
     e = fit.errors
     sigma_err = f"{e[2]:.3g}" if e[2] > 0 else "held (given)"
     write_json(
@@ -160,10 +172,10 @@ def write_in_plane_report(
         f"| kappa | {fit.kappa:.6g} | {e[1]:.3g} |",
         f"| sigma (rms facet slope) | {fit.sigma:.6g} | {sigma_err} |",
         "",
-        f"Goodness: {goodness}; fit {'converged' if fit.success else 'did NOT converge'}; run time "
+        f"Goodness: {sentence}; fit {'converged' if fit.success else 'did NOT converge'}; run time "
         f"{seconds:.1f} s. The 1-sigma errors are those of the linearised least squares "
-        "(the Jacobian at the optimum); `scatterlab fit-dolp` or `fit-mueller --posterior-steps` give "
-        "posterior intervals.",
+        "(the Jacobian at the optimum): trustworthy when the fit is good and no parameter sits on a "
+        "bound (n in [0.01, 10], kappa in [0, 30], sigma in [0.01, 1.5]).",
         "",
     ]
     if data.std is not None and stat > 4:

@@ -143,6 +143,15 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
     warn_if_radians(table.path, (theta_i, theta_r), f, stacklevel=2)
     pi = col("phi", False)
     phi = np.full(theta_i.shape, np.pi) if pi is None else angles(pi)
+    if pi is not None:
+        bad = np.abs(phi) > 2 * np.pi + 1e-12
+        if bad.any():
+            row = int(np.argmax(bad))
+            raise ValueError(
+                f"{table.where(row)}, column {table.names[pi]!r}: azimuth {table.values[row, pi]} "
+                f"{angle_unit} is outside [-360, 360] deg (an azimuth in degrees in a file read "
+                "with angle_unit='rad'? every angle column takes the same unit)"
+            )
     if pi is None:
         notes.append("no azimuth column: phi = 180 deg (observation in the plane of incidence)")
     di = col("dolp")

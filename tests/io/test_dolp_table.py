@@ -47,3 +47,11 @@ def test_ellipsometry_in_radians_read_as_degrees_is_pointed_out(tmp_path):
         warnings.simplefilter("error")
         data = read_ellipsometry(path, angle_unit="rad")
     np.testing.assert_allclose(data.theta, [0.5, 0.7])
+
+
+def test_an_azimuth_in_degrees_in_a_radian_file_is_refused(tmp_path):
+    # theta in radians but phi still 180 (degrees): read as 180 rad it would be a silent wrong geometry
+    path = tmp_path / "p.csv"
+    path.write_text("theta_i,theta_r,phi,dolp\n0.5,0.5,180,0.3\n0.7,0.7,180,0.5\n")
+    with pytest.raises(ValueError, match=r"azimuth 180.0 rad is outside \[-360, 360\] deg"):
+        read_dolp_table(path, angle_unit="rad")
