@@ -314,9 +314,16 @@ def _fit_dolp(args) -> int:
             raise ValueError(f"--sigma must be a known rms slope in [0.001, 2.5], got {args.sigma}")
         if args.noise is not None and not (np.isfinite(args.noise) and args.noise > 0):
             raise ValueError(f"--noise must be a DOLP standard deviation > 0, got {args.noise}")
+        from pathlib import Path
+
         data = read_dolp_table(
             args.file, _columns(args.column, DOLP_COLUMNS), angle_unit=args.angle_unit
         )
+        if (Path(args.out) / "fit_dolp.md").exists() and not args.force:
+            # before the sampling, and in the command line's words
+            raise FileExistsError(
+                f"{Path(args.out) / 'fit_dolp.md'} exists; pass --force to replace it"
+            )
         # the error: --noise, else the file's per-row std (a diagonal covariance), else inferred
         noise = args.noise
         cov = np.diag(data.std**2) if noise is None and data.std is not None else None
@@ -351,8 +358,12 @@ def _fit_dolp(args) -> int:
             else ""
         )
     )
-    if not post.converged:
-        print(f"scatterlab: warning: {post.convergence_reason}", file=sys.stderr)
+    if not post.converged:  # the sampler has warned why; say how in the command line's words
+        print(
+            "scatterlab: not converged: a longer chain with --posterior-steps N "
+            f"(this run: {args.posterior_steps or 'until converged, up to the sampler limit'})",
+            file=sys.stderr,
+        )
     print(f"report: {report}")
     return 0
 

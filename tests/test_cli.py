@@ -251,6 +251,8 @@ def test_fit_dolp_column_names_a_users_column(tmp_path, capsys):
     assert main([*argv, "--column", "dolp:p_measured"]) == 2
     err = capsys.readouterr().err
     assert "--column must be KEY=NAME" in err and "Traceback" not in err
+    assert main([*argv, "--column", "dolp=p_measured"]) == 2  # the report exists: no sampling
+    assert "exists; pass --force to replace it" in capsys.readouterr().err
 
 
 def test_fit_ellipsometry_recovers_the_example_and_reports(tmp_path, capsys):

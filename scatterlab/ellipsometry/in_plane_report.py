@@ -138,7 +138,7 @@ def write_in_plane_report(
         out / "metrics.json",
         {
             "source": str(source),
-            "angles_deg": np.degrees(data.theta),
+            "angles_deg": np.round(np.degrees(data.theta), 9),
             "wavelength_m": data.wavelength,
             "time_convention": convention,
             "n": fit.n,
