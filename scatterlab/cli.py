@@ -338,7 +338,27 @@ def _fit_dolp(args) -> int:
             covariance=cov,
             n_steps=args.posterior_steps,
         )
-        report = posterior_report(post, args.out, "fit_dolp", rng=args.seed, overwrite=args.force)
+        error = (
+            f"--noise {args.noise:g} for every row"
+            if args.noise is not None
+            else "the file's std column (one standard deviation per row)"
+            if cov is not None
+            else "inferred from the scatter about the model (no std column, no --noise)"
+        )
+        report = posterior_report(
+            post,
+            args.out,
+            "fit_dolp",
+            rng=args.seed,
+            overwrite=args.force,
+            title=f"Posterior of n - j kappa from {Path(args.file).name}",
+            notes=[
+                f"{data.dolp.size} rows of DOLP from {args.file}; DOLP error: {error}",
+                "roughness "
+                + (f"sigma = {args.sigma:g} known" if args.sigma is not None else "sampled"),
+                *data.notes,
+            ],
+        )
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
         print(f"scatterlab: {_message(exc)}", file=sys.stderr)
         return 2

@@ -81,20 +81,32 @@ def summary_table(post: Posterior, truth=None) -> str:
 
 
 def posterior_report(
-    post: Posterior, out, name: str = "posterior", *, rng=None, truth=None, overwrite: bool = False
+    post: Posterior,
+    out,
+    name: str = "posterior",
+    *,
+    rng=None,
+    truth=None,
+    overwrite: bool = False,
+    title: str | None = None,
+    notes=(),
 ) -> Path:
-    """Write the figures and the Markdown report of one posterior; returns the Markdown path.
+    """Write the figures, ``<name>.json`` (the summary) and the Markdown report of one posterior.
 
     Parameters
     ----------
     post : Posterior
-    out : path -- directory for ``<name>.md`` and the PNG figures.
+    out : path -- directory for ``<name>.md``, ``<name>.json`` and the PNG figures.
     name : str
     rng : anything :func:`numpy.random.default_rng` accepts
         Draws the posterior-predictive band; ``None`` takes fresh entropy, so give a seed for a
         reproducible figure.
     truth : (n, kappa, sigma), optional -- shown beside the estimates (simulations).
     overwrite : bool -- replace existing files (otherwise FileExistsError).
+    title : str, optional
+        The report's heading (default ``"Posterior: <name>"``).
+    notes : sequence of str
+        Lines about the data (source, error model, how the file was read), listed under the heading.
 
     Returns
     -------
@@ -102,6 +114,8 @@ def posterior_report(
         The written ``<name>.md``.
     """
     import matplotlib
+
+    from scatterlab.runtime.results import write_json
 
     matplotlib.use("Agg", force=False)
     out = Path(out)
@@ -115,8 +129,9 @@ def posterior_report(
         out / f"{name}_predictive.png",
         overwrite,
     )
+    write_json(out / f"{name}.json", post.summary(), overwrite=overwrite)
     path = out / f"{name}.md"
-    write_text(path, _markdown(post, name, truth), overwrite=overwrite)
+    write_text(path, _markdown(post, name, truth, title, notes), overwrite=overwrite)
     return path
 
 
@@ -173,13 +188,14 @@ def _predictive_figure(post, rng):
     return fig
 
 
-def _markdown(post, name, truth) -> str:
+def _markdown(post, name, truth, title=None, notes=()) -> str:
     d = post.summary()["diagnostics"]
-    ess = {k: round(v) if np.isfinite(v) else v for k, v in d["ess"].items()}
+    ess = ", ".join(f"{k} {round(v) if np.isfinite(v) else v}" for k, v in d["ess"].items())
     state = "converged" if d["converged"] else "**not converged**: " + d["convergence_reason"]
-    lines = [
-        f"# Posterior: {name}",
-        "",
+    lines = [f"# {title or f'Posterior: {name}'}", ""]
+    if notes:
+        lines += [f"- {n}" for n in notes] + [""]
+    lines += [
         summary_table(post, truth),
         "",
         f"Diagnostics: {d['n_steps']} steps x {d['walkers']} walkers, burn-in {d['burn']}, "

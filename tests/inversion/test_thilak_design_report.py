@@ -85,6 +85,16 @@ def test_report_writes_figures_and_tables(tmp_path):
         assert (tmp_path / f"glass{suffix}").stat().st_size > 1000
     text = md.read_text()
     assert "| n |" in text and "68 %" in text and "tau" in text
+    # the summary as JSON: the same quantiles as the table, the truth inside the 95 % interval
+    import json
+
+    summary = json.loads((tmp_path / "glass.json").read_text())["parameters"]
+    lo, hi = summary["n"]["ci95"]
+    assert lo <= 1.5 <= hi and f"{summary['n']['median']:.4g}" in text
+    titled = posterior_report(
+        post, tmp_path / "t", "g", title="Posterior of n - j kappa from x.csv", notes=["6 rows"]
+    )
+    assert titled.read_text().startswith("# Posterior of n - j kappa from x.csv\n\n- 6 rows\n")
     report_index(tmp_path, {"glass": post})
     assert "glass.md" in (tmp_path / "index.md").read_text()
     with pytest.raises(FileExistsError):
