@@ -18,7 +18,7 @@ Bad input raises ValueError naming the file, row and field.
 
 from scatterlab.io.dataset import Optics, PolarimetricDataset, Truth, read_dataset, write_dataset
 from scatterlab.io.dofp import SONY_POLARSENS, demosaic, mosaic
-from scatterlab.io.dolp_table import DolpData, read_dolp_table
+from scatterlab.io.dolp_table import DolpData, read_dolp_table, write_dolp_table
 from scatterlab.io.ellipsometry import EllipsometryData, read_ellipsometry, write_ellipsometry
 from scatterlab.io.mueller_brdf import MuellerBRDF, read_mueller_brdf, write_mueller_brdf
 from scatterlab.io.stacks import *  # noqa: F403  (the per-format readers and writers)
@@ -30,6 +30,7 @@ __all__ = [
     "write_mueller_brdf",
     "DolpData",
     "read_dolp_table",
+    "write_dolp_table",
     "EllipsometryData",
     "read_ellipsometry",
     "write_ellipsometry",

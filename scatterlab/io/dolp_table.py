@@ -22,7 +22,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from scatterlab.io.table import angle_factor, format_table, read_table, warn_if_radians
+from scatterlab.io.table import (
+    angle_factor,
+    format_table,
+    read_table,
+    warn_if_header_disagrees,
+    warn_if_radians,
+)
 
 __all__ = ["DolpData", "read_dolp_table", "write_dolp_table"]
 
@@ -108,6 +114,7 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
     f = angle_factor(angle_unit)
     unit = "deg" if f != 1.0 else "rad"
     table = read_table(path)
+    warn_if_header_disagrees(table, angle_unit)
     notes = []
 
     def col(what, required=True):

@@ -33,6 +33,7 @@ from scatterlab.io.table import (
     length_factor,
     read_table,
     time_convention_flip,
+    warn_if_header_disagrees,
     warn_if_radians,
     wavelength_column,
 )
@@ -133,6 +134,7 @@ def read_ellipsometry(
     """
     opt = ReaderOptions.of(angle_unit, wavelength_unit, time_convention, tolerance)
     table = read_table(path)
+    warn_if_header_disagrees(table, angle_unit, time_convention)
     ai = table.find(_ANGLE, "theta", columns=columns)
     table.check_unit(ai, "deg" if opt.angle != 1.0 else "rad", table.names[ai], "angle_unit")
     theta = table.values[:, ai] * opt.angle

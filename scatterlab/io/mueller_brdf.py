@@ -56,6 +56,7 @@ from scatterlab.io.table import (
     length_factor,
     read_table,
     time_convention_flip,
+    warn_if_header_disagrees,
     warn_if_radians,
     wavelength_column,
 )
@@ -346,6 +347,7 @@ def read_mueller_brdf(
     """
     opt = ReaderOptions.of(angle_unit, wavelength_unit, time_convention, tolerance)
     table = read_table(path)
+    warn_if_header_disagrees(table, angle_unit, time_convention)
     wi = table.find(ALIASES["wavelength"], "wavelength", columns=columns)
     wavelength = wavelength_column(table, wi, opt.length)
     theta_i, phi_i, theta_r, phi_r, notes = _angles(table, columns, opt)

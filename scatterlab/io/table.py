@@ -125,6 +125,55 @@ def warn_if_radians(path, polar, factor: float, stacklevel: int = 2) -> None:
         )
 
 
+def warn_if_header_disagrees(
+    table, angle_unit: str | None = None, time_convention: str | None = None, stacklevel: int = 2
+) -> None:
+    """Warn when a file's header comment states an angle unit or time convention other than the one
+    it is read with.
+
+    The writers of :mod:`scatterlab.io` state both (``# angles in deg, ...; time convention
+    exp(-iwt)``); a reader does not switch on its own (an argument means what it says), it says so.
+
+    Parameters
+    ----------
+    table : Table
+        The file as read (its ``comments``).
+    angle_unit, time_convention : str, optional
+        What the reader was told (None: not checked).
+    stacklevel : int
+        ``warnings.warn``'s, counted from the reader that calls this.
+
+    Returns
+    -------
+    None
+        Warns (``UserWarning``) or does nothing.
+    """
+    import warnings
+
+    text = " ".join(table.comments)
+    problems = []
+    stated = re.search(r"angles in (deg|rad)\b", text)
+    if angle_unit is not None and stated and angle_factor(stated[1]) != angle_factor(angle_unit):
+        problems.append(
+            f"angles in {stated[1]} but they are read as {angle_unit} (angle_unit={stated[1]!r}, "
+            f"--angle-unit {stated[1]} on the command line)"
+        )
+    stated = re.search(r"time convention (exp\([+-][ij]wt\))", text)
+    if (
+        time_convention is not None
+        and stated
+        and time_convention_flip(stated[1]) != time_convention_flip(time_convention)
+    ):
+        problems.append(
+            f"time convention {stated[1]} but it is read as {time_convention} "
+            f"(time_convention={stated[1]!r}, --time-convention {stated[1]!r} on the command line)"
+        )
+    for problem in problems:
+        warnings.warn(
+            f"{table.path}: its header states {problem}", UserWarning, stacklevel=stacklevel + 1
+        )
+
+
 def length_factor(unit: str, what: str = "wavelength_unit") -> float:
     """Metres per ``unit`` (``"m"``, ``"mm"``, ``"um"``, ``"nm"``).
 

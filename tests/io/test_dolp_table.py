@@ -55,3 +55,35 @@ def test_an_azimuth_in_degrees_in_a_radian_file_is_refused(tmp_path):
     path.write_text("theta_i,theta_r,phi,dolp\n0.5,0.5,180,0.3\n0.7,0.7,180,0.5\n")
     with pytest.raises(ValueError, match=r"azimuth 180.0 rad is outside \[-360, 360\] deg"):
         read_dolp_table(path, angle_unit="rad")
+
+
+def test_a_header_that_states_another_unit_or_convention_is_pointed_out(tmp_path):
+    """The writers state the units and the time convention in the header; read otherwise, the
+    reader says so (and does as told)."""
+    from scatterlab.io import (
+        DolpData,
+        EllipsometryData,
+        read_ellipsometry,
+        write_dolp_table,
+        write_ellipsometry,
+    )
+
+    th = np.radians([30.0, 50.0, 70.0])
+    dolp = DolpData(th, th, np.full(3, np.pi), np.array([0.3, 0.5, 0.7]))
+    path = write_dolp_table(tmp_path / "d.csv", dolp, angle_unit="rad")
+    with pytest.warns(UserWarning) as record:
+        read_dolp_table(path)
+    said = " ".join(str(w.message) for w in record)
+    assert "its header states angles in rad but they are read as deg" in said
+    assert "radians read as degrees" in said
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_dolp_table(path, angle_unit="rad")
+    data = EllipsometryData(th, np.tile([0.0, 0.9, -0.8, -0.1], (3, 1)))
+    path = write_ellipsometry(tmp_path / "e.csv", data, time_convention="exp(-iwt)")
+    with pytest.warns(UserWarning, match="time convention exp\\(-iwt\\) but it is read as"):
+        read_ellipsometry(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        back = read_ellipsometry(path, time_convention="exp(-iwt)")
+    np.testing.assert_allclose(back.elements, data.elements, atol=1e-12)
