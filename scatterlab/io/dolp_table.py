@@ -166,9 +166,11 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
     bad = (dolp < -0.05) | (dolp > 1.05)
     if bad.any():
         row = int(np.argmax(bad))
+        percent = np.all((dolp >= -5) & (dolp <= 105)) and dolp.max() > 1.05
         raise ValueError(
             f"{table.where(row)}, column {table.names[di]!r}: DOLP {dolp[row]} is outside [0, 1] "
             "(by more than a noise margin of 0.05)"
+            + ("; the column looks like percent: divide it (and its std) by 100" if percent else "")
         )
     si = col("std", False)
     std = None if si is None else table.values[:, si]

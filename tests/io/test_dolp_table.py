@@ -87,3 +87,14 @@ def test_a_header_that_states_another_unit_or_convention_is_pointed_out(tmp_path
         warnings.simplefilter("error")
         back = read_ellipsometry(path, time_convention="exp(-iwt)")
     np.testing.assert_allclose(back.elements, data.elements, atol=1e-12)
+
+
+def test_a_dolp_in_percent_is_refused_with_the_fix(tmp_path):
+    path = _write(tmp_path / "pct.csv", [30, 45, 60], [30.5, 52.0, 71.2])
+    with pytest.raises(ValueError, match="looks like percent: divide it"):
+        read_dolp_table(path)
+    path = _write(tmp_path / "neg.csv", [30, 45, 60], [0.3, -0.5, 0.7])
+    with pytest.raises(
+        ValueError, match=r"outside \[0, 1\] \(by more than a noise margin of 0.05\)$"
+    ):
+        read_dolp_table(path)
