@@ -223,6 +223,18 @@ def _columns(pairs, keys) -> dict | None:
     return out
 
 
+def _read_noting(reader, *args, **kwargs):
+    """``reader(*args, **kwargs)``, its warnings printed as usual and kept in the data's ``notes``, so
+    that the report says what the screen said (radians read as degrees, a header stating another unit)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        data = reader(*args, **kwargs)
+    for w in caught:
+        _show_warning(w.message, w.category, w.filename, w.lineno)
+        data.notes.append(f"warning: {w.message}")
+    return data
+
+
 def _fit_mueller(args) -> int:
     import time
 
@@ -233,7 +245,8 @@ def _fit_mueller(args) -> int:
     from scatterlab.io import read_mueller_brdf
 
     try:
-        data = read_mueller_brdf(
+        data = _read_noting(
+            read_mueller_brdf,
             args.file,
             _columns(args.column, MUELLER_COLUMNS),
             angle_unit=args.angle_unit,
@@ -316,8 +329,11 @@ def _fit_dolp(args) -> int:
             raise ValueError(f"--noise must be a DOLP standard deviation > 0, got {args.noise}")
         from pathlib import Path
 
-        data = read_dolp_table(
-            args.file, _columns(args.column, DOLP_COLUMNS), angle_unit=args.angle_unit
+        data = _read_noting(
+            read_dolp_table,
+            args.file,
+            _columns(args.column, DOLP_COLUMNS),
+            angle_unit=args.angle_unit,
         )
         if (Path(args.out) / "fit_dolp.md").exists() and not args.force:
             # before the sampling, and in the command line's words
@@ -523,7 +539,8 @@ def _fit_ellipsometry(args) -> int:
     try:
         if args.sigma is not None and not 1e-3 <= args.sigma <= 1.5:
             raise ValueError(f"--sigma must be a known rms slope in [0.001, 1.5], got {args.sigma}")
-        data = read_ellipsometry(
+        data = _read_noting(
+            read_ellipsometry,
             args.file,
             _columns(args.column, ELLIPSOMETRY_COLUMNS),
             angle_unit=args.angle_unit,

@@ -304,3 +304,14 @@ def test_fit_ellipsometry_column_and_bad_file(tmp_path, capsys):
     assert main([*argv, "--column", "theta=incidence_angle"]) == 0
     assert main(["fit-ellipsometry", str(tmp_path / "none.csv")]) == 2
     assert "no such file" in capsys.readouterr().err
+    # radians read as degrees: said on screen and kept in the report
+    lines = [x for x in example.read_text().splitlines() if x and not x.startswith("#")]
+    rows = [x.split(",") for x in lines[1:]]
+    rad = "\n".join(
+        [lines[0]] + [",".join([f"{float(r[0]) * 3.14159265 / 180:.6f}", *r[1:]]) for r in rows]
+    )
+    (tmp_path / "rad.csv").write_text(rad + "\n")
+    argv = ["fit-ellipsometry", str(tmp_path / "rad.csv"), "--out", str(tmp_path / "r")]
+    assert main(argv) == 0
+    assert "radians read as degrees" in capsys.readouterr().err
+    assert "radians read as degrees" in (tmp_path / "r" / "report.md").read_text()
