@@ -585,6 +585,7 @@ def _ellipsometry_warnings(data, fit, args) -> list:
     import numpy as np
 
     from scatterlab.ellipsometry import fit_mueller_elements
+    from scatterlab.ellipsometry.fit import FIT_BOUNDS
     from scatterlab.ellipsometry.in_plane_report import goodness
 
     out = []
@@ -593,8 +594,9 @@ def _ellipsometry_warnings(data, fit, args) -> list:
             "the fit did not converge: these numbers are not an estimate (check the angle unit, "
             "--angle-unit, and the time convention)"
         )
-    # fit_mueller_elements' default bounds (kappa = 0, a dielectric, is a physical value, not flagged)
-    for name, v, bounds in (("n", fit.n, (0.01, 10.0)), ("kappa", fit.kappa, (30.0,))):
+    # kappa = 0 (a dielectric) is a physical value, not flagged
+    (n_lo, n_hi), (_, k_hi), _ = FIT_BOUNDS
+    for name, v, bounds in (("n", fit.n, (n_lo, n_hi)), ("kappa", fit.kappa, (k_hi,))):
         if any(np.isclose(v, b, rtol=1e-6, atol=0) for b in bounds):
             out.append(f"{name} = {v:.4g} is a bound of the fit, not an estimate")
     stat, _, _ = goodness(data, fit)

@@ -291,6 +291,23 @@ def test_fit_ellipsometry_recovers_the_example_and_reports(tmp_path, capsys):
     assert "--sigma must be" in capsys.readouterr().err
 
 
+def test_fit_ellipsometry_warns_of_a_parameter_on_the_fit_bound(tmp_path, capsys):
+    """A metal beyond the fit's box (kappa 40 > 30): kappa ends on the bound, which is said on screen."""
+    import numpy as np
+
+    from scatterlab.ellipsometry import model_elements
+    from scatterlab.ellipsometry.fit import FIT_BOUNDS
+
+    theta = np.arange(20.0, 75.0, 5.0)
+    el = model_elements(np.radians(theta), 2.0, 40.0, 0.3)
+    rows = [",".join(f"{v:.12g}" for v in (t, *e)) for t, e in zip(theta, el)]
+    (tmp_path / "e.csv").write_text("theta,m12,m22,m33,m34\n" + "\n".join(rows) + "\n")
+    assert main(["fit-ellipsometry", str(tmp_path / "e.csv"), "--out", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    assert f"kappa = {FIT_BOUNDS[1][1]:.4g} is a bound of the fit" in err, err
+    assert "kappa in [0, 30]" in (tmp_path / "o" / "report.md").read_text()
+
+
 def test_fit_ellipsometry_column_and_bad_file(tmp_path, capsys):
     from pathlib import Path
 

@@ -23,6 +23,7 @@ from scatterlab.pbrdf import Model
 __all__ = [
     "ELEMENTS",
     "ELEMENT_TOLERANCE",
+    "FIT_BOUNDS",
     "IndexFitMixin",
     "normalised_elements",
     "model_elements",
@@ -33,6 +34,9 @@ __all__ = [
 
 ELEMENTS = ((0, 1), (1, 1), (2, 2), (2, 3))
 ELEMENT_TOLERANCE = 0.05  # normalised elements may exceed [-1, 1] by this much (measurement noise)
+# fit_mueller_elements' default box for (n, kappa, sigma): a parameter at one of these values is a bound,
+# not an estimate (kappa = 0, a dielectric, is physical)
+FIT_BOUNDS = ((0.01, 10.0), (0.0, 30.0), (0.01, 1.5))
 
 
 def normalised_elements(M) -> np.ndarray:
@@ -152,7 +156,7 @@ def fit_mueller_elements(
     fit_sigma: bool = True,
     starts=((0.5, 5.0), (1.5, 10.0), (3.0, 3.0), (1.5, 0.1)),
     sigma0: float = 0.3,
-    bounds=((0.01, 10.0), (0.0, 30.0), (0.01, 1.5)),
+    bounds=None,
     shadowing="torrance-sparrow",
     diffuse="hyde",
     tolerance: float = ELEMENT_TOLERANCE,
@@ -176,7 +180,8 @@ def fit_mueller_elements(
         Starting points; the best final cost wins (metal/dielectric ambiguity).
     sigma0 : float
         Starting roughness when ``sigma`` is not given (finite, > 0).
-    bounds : ((n_lo, n_hi), (k_lo, k_hi), (s_lo, s_hi))
+    bounds : ((n_lo, n_hi), (k_lo, k_hi), (s_lo, s_hi)), optional
+        Box of the fit (default :data:`FIT_BOUNDS`).
     shadowing, diffuse : str
         Options of :class:`scatterlab.pbrdf.Model`.
     tolerance : float
@@ -213,7 +218,7 @@ def fit_mueller_elements(
         return ((pred - y) * w).ravel()
 
     P = 3 if fit_sigma else 2
-    lo, hi = np.array(bounds, float)[:P].T
+    lo, hi = np.array(FIT_BOUNDS if bounds is None else bounds, float)[:P].T
     x0s = [np.clip([n0, k0, s0][:P], lo + 1e-9, hi - 1e-9) for n0, k0 in starts]
     best = least_squares_from_starts(residual, x0s, lo, hi, tol=1e-15, max_nfev=2000)
     cov = _covariance(best.jac, 1.0 if std is not None else 2 * best.cost / _dof(best))

@@ -61,6 +61,15 @@ def plot_in_plane(data, fit, path, *, shadowing="torrance-sparrow", diffuse="hyd
     return Path(path)
 
 
+def _bounds_text() -> str:
+    """The fit's box, as the report states it: ``n in [0.01, 10], kappa in [0, 30], sigma in [0.01, 1.5]``."""
+    from scatterlab.ellipsometry.fit import FIT_BOUNDS
+
+    return ", ".join(
+        f"{name} in [{lo:g}, {hi:g}]" for name, (lo, hi) in zip(("n", "kappa", "sigma"), FIT_BOUNDS)
+    )
+
+
 def goodness(data, fit) -> tuple[float, int, str]:
     """Reduced chi^2 (weighted data) or mean square residual, its degrees of freedom and a sentence.
 
@@ -175,7 +184,7 @@ def write_in_plane_report(
         f"Goodness: {sentence}; fit {'converged' if fit.success else 'did NOT converge'}; run time "
         f"{seconds:.1f} s. The 1-sigma errors are those of the linearised least squares "
         "(the Jacobian at the optimum): trustworthy when the fit is good and no parameter sits on a "
-        "bound (n in [0.01, 10], kappa in [0, 30], sigma in [0.01, 1.5]).",
+        f"bound ({_bounds_text()}).",
         "",
     ]
     if data.std is not None and stat > 4:
