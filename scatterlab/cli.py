@@ -444,6 +444,20 @@ def _add_fit_dolp(sub):
     )
 
 
+def _time_convention(text: str) -> str:
+    """``--time-convention``: any spelling the readers accept (``exp(-jwt)``, ``exp(- i omega t)``)."""
+    from scatterlab.io.table import time_convention_flip
+
+    try:
+        time_convention_flip(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a time convention: exp(+jwt) (= exp(+iwt), engineering, the reference "
+            "text) or exp(-iwt) (= exp(-jwt), physics, SCATMECH)"
+        ) from None
+    return text
+
+
 def _add_file_and_model_options(parser, flip: str, wavelength: str) -> None:
     """The fit commands' file units and time convention, and the pBRDF's model options."""
     parser.add_argument(
@@ -455,8 +469,9 @@ def _add_file_and_model_options(parser, flip: str, wavelength: str) -> None:
     parser.add_argument(
         "--time-convention",
         default="exp(+jwt)",
-        choices=["exp(+jwt)", "exp(-iwt)"],
-        help=f"the file's time convention ({flip})",
+        type=_time_convention,
+        metavar="{exp(+jwt),exp(-iwt)}",
+        help=f"the file's time convention ({flip}; also exp(-jwt), exp(+iwt), with spaces or omega)",
     )
     parser.add_argument(
         "--shadowing", default="torrance-sparrow", help="pBRDF shadowing (torrance-sparrow, none)"

@@ -1,3 +1,5 @@
+import pytest
+
 from scatterlab.cli import main
 
 
@@ -289,6 +291,12 @@ def test_fit_ellipsometry_recovers_the_example_and_reports(tmp_path, capsys):
     assert abs(m["n"] - 1.226) <= 2 * m["errors_1sigma"][0]
     assert main([*argv, "--sigma", "3"]) == 2
     assert "--sigma must be" in capsys.readouterr().err
+    # every spelling the readers take: exp(-jwt) is exp(-iwt), the misfit is told as above
+    assert main([*argv, "--time-convention", "exp(-j omega t)"]) == 0
+    assert "other time convention (--time-convention)" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main([*argv, "--time-convention", "exp(jwt"])
+    assert "is not a time convention: exp(+jwt)" in capsys.readouterr().err
 
 
 def test_fit_ellipsometry_warns_of_a_parameter_on_the_fit_bound(tmp_path, capsys):
