@@ -8,7 +8,9 @@
   update maximizes the objective; :func:`classification_errors` scores a label map like Table 4;
 * :func:`layout_psf` -- the PSF of one frame, or of each of several exposures, found with a few-material
   object (each material uniform; a soft layout, or pure interiors with mixing only along the edges): the
-  prior a single frame's likelihood needs to tell the PSF.
+  prior a single frame's likelihood needs to tell the PSF;
+* :func:`phase_diversity` -- the PSF of one exposure from frames with known pupil-phase offsets (defocused
+  cameras beside the polarimeter): an instrument that identifies the PSF where one frame cannot.
 """
 
 from scatterlab.deconvolution.classify import classification_errors, classify_dolp
@@ -29,6 +31,11 @@ from scatterlab.deconvolution.em import (
     psf_step,
 )
 from scatterlab.deconvolution.layout import LayoutResult, layout_psf
+from scatterlab.deconvolution.phase_diversity import (
+    PhaseDiversityResult,
+    defocus_phase,
+    phase_diversity,
+)
 from scatterlab.deconvolution.priors import (
     PRIOR_SETS,
     SuperGaussianPrior,
@@ -73,4 +80,7 @@ __all__ = [
     "gerchberg_saxton",
     "resample_psf",
     "psf_distance",
+    "phase_diversity",
+    "PhaseDiversityResult",
+    "defocus_phase",
 ]
