@@ -37,6 +37,34 @@ def _message(exc) -> str:
     return str(exc)
 
 
+def _table_command(path) -> str | None:
+    """The fit command whose table ``path`` looks like (by its column names), or None."""
+    from scatterlab.io.table import read_table
+
+    try:
+        keys = set(read_table(path).keys)
+    except (OSError, ValueError):
+        return None
+    if "dolp" in keys:
+        return "fit-dolp"
+    elements = {f"{p}{i}{j}" for p in ("m", "fr") for i in "1234" for j in "1234"}
+    if "thetai" in keys and any(k.split("/")[0] in elements for k in keys):
+        return "fit-mueller"
+    if "theta" in keys and keys & {"m12", "m22", "m33", "m34"}:
+        return "fit-ellipsometry"
+    return None
+
+
+def _other_command(exc, path, command: str) -> str:
+    """A hint when a fit command is given another command's table (its columns are missing)."""
+    if not isinstance(exc, ValueError) or "column" not in str(exc):
+        return ""
+    other = _table_command(path)
+    if other is None or other == command:
+        return ""
+    return f"\n  {path} looks like a table for `scatterlab {other}`: try that command"
+
+
 def _executor(args):
     from scatterlab.runtime import get_executor
 
@@ -286,7 +314,10 @@ def _fit_mueller(args) -> int:
             overwrite=args.force,
         )
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
-        print(f"scatterlab: {_message(exc)}", file=sys.stderr)
+        print(
+            f"scatterlab: {_message(exc)}{_other_command(exc, args.file, 'fit-mueller')}",
+            file=sys.stderr,
+        )
         return 2
     e = fit.errors
     quality = (
@@ -376,7 +407,10 @@ def _fit_dolp(args) -> int:
             ],
         )
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
-        print(f"scatterlab: {_message(exc)}", file=sys.stderr)
+        print(
+            f"scatterlab: {_message(exc)}{_other_command(exc, args.file, 'fit-dolp')}",
+            file=sys.stderr,
+        )
         return 2
     s = post.summary()["parameters"]
     names = ("n", "kappa") if args.sigma is not None else ("n", "kappa", "sigma")
@@ -584,7 +618,10 @@ def _fit_ellipsometry(args) -> int:
             overwrite=args.force,
         )
     except (ValueError, FileExistsError, FileNotFoundError) as exc:
-        print(f"scatterlab: {_message(exc)}", file=sys.stderr)
+        print(
+            f"scatterlab: {_message(exc)}{_other_command(exc, args.file, 'fit-ellipsometry')}",
+            file=sys.stderr,
+        )
         return 2
     e = fit.errors
     sigma = f"{fit.sigma:.4g} +- {e[2]:.2g}" if args.sigma is None else f"{fit.sigma:.4g} (known)"

@@ -316,6 +316,27 @@ def test_fit_ellipsometry_warns_of_a_parameter_on_the_fit_bound(tmp_path, capsys
     assert "kappa in [0, 30]" in (tmp_path / "o" / "report.md").read_text()
 
 
+@pytest.mark.parametrize(
+    "command, example, other",
+    [
+        ("fit-ellipsometry", "dolp_paint.csv", "fit-dolp"),
+        ("fit-dolp", "ellipsometry_in_plane.csv", "fit-ellipsometry"),
+        ("fit-mueller", "ellipsometry_in_plane.csv", "fit-ellipsometry"),
+        ("fit-dolp", "mueller_brdf_two_wavelengths.csv", "fit-mueller"),
+    ],
+)
+def test_fit_commands_name_the_command_for_another_commands_table(
+    command, example, other, tmp_path, capsys
+):
+    from pathlib import Path
+
+    path = Path(__file__).parents[1] / "data" / "examples" / example
+    assert main([command, str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert f"looks like a table for `scatterlab {other}`" in err and "Traceback" not in err, err
+    assert not (tmp_path / "o").exists()
+
+
 def test_fit_ellipsometry_column_and_bad_file(tmp_path, capsys):
     from pathlib import Path
 
