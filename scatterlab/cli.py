@@ -366,10 +366,11 @@ def _fit_dolp(args) -> int:
             _columns(args.column, DOLP_COLUMNS),
             angle_unit=args.angle_unit,
         )
-        if (Path(args.out) / "fit_dolp.md").exists() and not args.force:
-            # before the sampling, and in the command line's words
+        # report.md like the other commands' reports; refused before the sampling, in the command
+        # line's words
+        if (Path(args.out) / "report.md").exists() and not args.force:
             raise FileExistsError(
-                f"{Path(args.out) / 'fit_dolp.md'} exists; pass --force to replace it"
+                f"{Path(args.out) / 'report.md'} exists; pass --force to replace it"
             )
         # the error: --noise, else the file's per-row std (a diagonal covariance), else inferred
         noise = args.noise
@@ -395,7 +396,7 @@ def _fit_dolp(args) -> int:
         report = posterior_report(
             post,
             args.out,
-            "fit_dolp",
+            "report",
             rng=args.seed,
             overwrite=args.force,
             title=f"Posterior of n - j kappa from {Path(args.file).name}",

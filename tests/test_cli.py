@@ -203,7 +203,7 @@ def test_fit_dolp_recovers_the_index_from_a_table_of_dolp(tmp_path, capsys):
     assert main([*argv, "--posterior-steps", "400"]) == 0
     out = capsys.readouterr().out
     assert "n = " in out and "(sigma 0.3 known)" in out
-    text = (tmp_path / "o" / "fit_dolp.md").read_text()
+    text = (tmp_path / "o" / "report.md").read_text()
     for name, truth in (("n", 1.5), ("kappa", 0.1)):
         lo, hi = map(
             float, re.search(rf"\| {name} \| [^|]+\| [^|]+\| \[([^,]+), ([^\]]+)\]", text).groups()
