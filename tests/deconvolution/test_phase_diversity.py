@@ -99,6 +99,20 @@ def test_phase_diversity_finds_the_turbulent_psf_that_one_frame_cannot():
     assert psf_distance(held.psfs[0], hs[0])[0] < 0.4
 
 
+def test_phase_diversity_stays_finite_on_zero_photon_frames():
+    """Dark frames, and a few photons on a dark field with read noise: no NaN or negative object."""
+    A = circular_pupil(16, 8)
+    div = np.stack([np.zeros((16, 16)), defocus_phase(A, 1.0)])
+    sparse = np.zeros((2, 32, 32))
+    sparse[:, 10:20, 10:20] = np.random.default_rng(0).poisson(3, (2, 10, 10))
+    for frames, noise in ((np.zeros((2, 32, 32)), 0.0), (sparse, 5.0)):
+        res = phase_diversity(frames, div, A, read_noise=noise, smoothing=(2, 0), iterations=5)
+        for a in (res.phase, res.psfs, res.object):
+            assert np.all(np.isfinite(a))
+        assert np.all(res.object >= 0) and np.isfinite(res.neg_log_likelihood)
+        np.testing.assert_allclose(res.psfs.sum(axis=(1, 2)), 1.0)
+
+
 def test_phase_diversity_refuses_bad_input():
     A = circular_pupil(16, 8)
     frames = np.ones((2, 32, 32))
