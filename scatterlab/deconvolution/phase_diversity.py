@@ -68,16 +68,17 @@ class PhaseDiversityResult:
     Attributes
     ----------
     phase : ndarray, shape (n, n)
-        The pupil phase of the first frame [rad] (zero outside the aperture; piston and tilt are not
-        determined: the tilt moves the object instead).
+        The unknown phase common to all frames [rad] (the focused frame's, whose offset is zero); zero
+        outside the aperture. Piston and tilt are not determined: the tilt moves the object instead.
     psfs : ndarray, shape (F, 2n, 2n)
         Each frame's PSF (centred, unit sum, 2 pixels per lambda/D as :func:`scatterlab.imaging.psf`).
     object : ndarray, shape (H + 2 pad, W + 2 pad)
         The object [counts of a gain-1 frame per pixel], on the padded field.
     neg_log_likelihood : float
-        Poisson negative log-likelihood at the end (up to a data-only constant).
+        Poisson negative log-likelihood at the end, as half the deviance (0 for a perfect fit).
     history : list of tuple
-        ``(smoothing, neg_log_likelihood)`` after each stage.
+        ``(smoothing, neg_log_likelihood, status)`` after each stage (status: scipy's L-BFGS-B code,
+        0 converged, 1 iteration limit).
     """
 
     phase: np.ndarray
@@ -100,6 +101,8 @@ class _Likelihood:
         self.data = np.zeros((F,) + self.shape)
         self.data[:, pad : pad + H, pad : pad + W] = frames
         self.diversity, self.gains, self.offsets = diversity, gains, offsets
+        # the data plus the read-noise offset (Snyder), which a dark-subtracted frame can push below 0
+        self.shifted = np.maximum(self.data + offsets[:, None, None], 0.0) * self.mask
         self.model = PupilPhasePSF(pupil, self.shape, np.ones(self.shape, bool))
 
     def _otf(self, h):
@@ -110,12 +113,13 @@ class _Likelihood:
         irfft = lambda a: np.fft.irfft2(a, s=self.shape)  # noqa: E731
         O = np.fft.rfft2(obj)
         nll, g_phase, g_obj = 0.0, np.zeros_like(phase), np.zeros(self.shape)
-        for d, theta, g, b in zip(self.data, self.diversity, self.gains, self.offsets):
+        for y, theta, g, b in zip(self.shifted, self.diversity, self.gains, self.offsets):
             ph = phase + theta
             Hf = self._otf(self.model.psf(ph))
             m = np.maximum(g * irfft(O * Hf) + b, 1e-12)
-            nll += float(np.sum(self.mask * (m - (d + b) * np.log(m))))
-            R = np.fft.rfft2(self.mask * (1.0 - (d + b) / m) * g)
+            # the Poisson deviance / 2: zero for a perfect fit, so tolerances do not scale with brightness
+            nll += float(np.sum(self.mask * (m - y + y * np.log(np.where(y > 0, y, 1.0) / m))))
+            R = np.fft.rfft2(self.mask * (1.0 - y / m) * g)
             # dL/dh[x] = sum_y R[y] o[y - x] (centred), dL/do = R correlated with h
             g_phase += self.model.gradient(ph, np.fft.fftshift(irfft(R * np.conj(O))))
             g_obj += irfft(R * np.conj(Hf))
@@ -132,25 +136,47 @@ def _check(frames, diversity, pupil, gains, read_noise, pad, smoothing, iteratio
             f"phase offset), got shape {d.shape}"
         )
     A = as_finite(pupil, "pupil")
-    if A.ndim != 2 or A.shape[0] != A.shape[1] or not np.any(A > 0):
-        raise ValueError(f"pupil must be a square 2-D aperture with light, got shape {A.shape}")
+    if A.ndim != 2 or A.shape[0] != A.shape[1] or not np.any(A > 0) or np.any(A < 0):
+        raise ValueError(
+            f"pupil must be a square 2-D aperture amplitude (>= 0) with light, got shape {A.shape}"
+        )
     th = as_finite(diversity, "diversity")
     if th.shape != (d.shape[0],) + A.shape:
         raise ValueError(
             f"diversity must be one phase offset [rad] per frame, shape {(d.shape[0],) + A.shape}, "
             f"got {th.shape}"
         )
+    inside = A > 0
+    if all(np.allclose(t[inside], th[0][inside]) for t in th[1:]):
+        raise ValueError(
+            "diversity: every frame has the same phase offset; without a known difference between the "
+            "frames the PSF is not identified (defocus_phase gives one)"
+        )
     F = d.shape[0]
-    g = np.ones(F) if gains is None else np.broadcast_to(as_finite(gains, "gains"), (F,)).copy()
+    per_frame = []
+    for name, value in (("gains", 1.0 if gains is None else gains), ("read_noise", read_noise)):
+        v = np.atleast_1d(as_finite(value, name))
+        if v.shape not in ((1,), (F,)):
+            raise ValueError(
+                f"{name} must be one number or one per frame ({F}), got shape {v.shape}"
+            )
+        per_frame.append(np.broadcast_to(v, (F,)).copy())
+    g, s = per_frame
     if np.any(g <= 0):
         raise ValueError(f"gains must be > 0 (each frame's share of the light), got {g}")
-    s = np.broadcast_to(as_finite(read_noise, "read_noise"), (F,)).copy()
     if np.any(s < 0):
         raise ValueError(f"read_noise must be >= 0 [e- rms], got {s}")
+    n = A.shape[0]
     if pad is None:
-        pad = max(d.shape[1], d.shape[2]) // 2
+        pad = max(n, max(d.shape[1], d.shape[2]) // 2)
     if isinstance(pad, bool) or not isinstance(pad, (int, np.integer)) or pad < 0:
         raise ValueError(f"pad must be an integer >= 0 [pixels], got {pad!r}")
+    if 2 * n > min(d.shape[1], d.shape[2]) + 2 * pad:
+        raise ValueError(
+            f"pad = {pad} is too small for the pupil's {2 * n} x {2 * n} PSF: the padded field "
+            f"must hold it (pad >= {(2 * n - min(d.shape[1], d.shape[2]) + 1) // 2}; >= {n} for no "
+            "wrap-around)"
+        )
     sm = [float(v) for v in np.atleast_1d(as_finite(smoothing, "smoothing"))]
     if not sm or any(v < 0 for v in sm):
         raise ValueError(
@@ -192,17 +218,20 @@ def phase_diversity(
     gains : array_like, shape (F,), optional
         Expected counts of each frame per unit object (> 0; default 1 for all).
     read_noise : float or array_like (F,)
-        Read noise [e- rms] (>= 0), modelled as a Poisson offset of its variance.
+        Total read noise of a frame pixel [e- rms] (>= 0; sqrt(2) times the per-read noise when a dark
+        frame was subtracted), modelled as a Poisson offset of its variance.
     pad : int, optional
-        Pixels of object around the field on every side (default half the field): light from there
-        enters the field.
+        Pixels of object around the field on every side (default the larger of n and half the field;
+        at least n - H/2 so that the 2n x 2n PSF fits the padded grid). With ``pad >= n`` light from
+        outside the field enters it and nothing wraps around.
     smoothing : sequence of float
         Gaussian widths [pupil pixels] of the phase parameterisation, one L-BFGS stage each, coarse to
         fine (0: a free phase).
     iterations : int
         L-BFGS iterations per stage (>= 1), the accuracy knob with ``smoothing``.
     phase0 : array_like, shape (n, n), optional
-        Start phase [rad] (default zero: the diffraction-limited PSF).
+        Start phase [rad] (default zero: the diffraction-limited PSF); the stages add smooth
+        corrections to it.
 
     Returns
     -------
@@ -231,9 +260,7 @@ def phase_diversity(
     mean = np.clip(np.mean(d / g[:, None, None], axis=0), 0.0, None)
     obj = np.pad(mean, pad, mode="edge")
     c = max(float(obj.mean()), 1e-12)  # object unit for the optimizer
-    scale = (
-        1.0 / d[0].size
-    )  # the likelihood per pixel: tolerances that do not depend on the field size
+    scale = 1.0 / d[0].size  # per pixel: tolerances that do not depend on the field size
     npx, no = n * n, obj.size
     history = []
     for width in stages:
@@ -241,13 +268,14 @@ def phase_diversity(
         def smooth(a, width=width):
             return gaussian_filter(a, width, mode="constant") if width > 0 else a
 
-        def objective(v, smooth=smooth):
-            ph = np.where(inside, smooth(v[:npx].reshape(n, n)), 0.0)
+        # each stage fits a smooth correction to the phase the last one ended at
+        def objective(v, smooth=smooth, base=phase):
+            ph = base + np.where(inside, smooth(v[:npx].reshape(n, n)), 0.0)
             nll, g_ph, g_o = like(ph, c * v[npx:].reshape(like.shape))
-            g_free = np.where(inside, smooth(np.where(inside, g_ph, 0.0)), 0.0)
+            g_free = smooth(np.where(inside, g_ph, 0.0))
             return nll * scale, np.concatenate([g_free.ravel(), c * g_o.ravel()]) * scale
 
-        x0 = np.concatenate([phase.ravel(), obj.ravel() / c])
+        x0 = np.concatenate([np.zeros(npx), obj.ravel() / c])
         bounds = [(None, None)] * npx + [(0.0, None)] * no
         res = minimize(
             objective,
@@ -257,9 +285,9 @@ def phase_diversity(
             bounds=bounds,
             options={"maxiter": iterations, "maxcor": 20},
         )
-        phase = np.where(inside, smooth(res.x[:npx].reshape(n, n)), 0.0)
+        phase = phase + np.where(inside, smooth(res.x[:npx].reshape(n, n)), 0.0)
         obj = c * res.x[npx:].reshape(like.shape)
-        history.append((width, float(res.fun / scale)))
+        history.append((width, float(res.fun / scale), int(res.status)))
     nll = like(phase, obj)[0]
     psfs = np.stack([pupil_psf(A, phase + t, pad=2) for t in theta])
     return PhaseDiversityResult(phase, psfs, obj, float(nll), history)

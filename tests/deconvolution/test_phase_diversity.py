@@ -80,12 +80,13 @@ def test_phase_diversity_finds_the_turbulent_psf_that_one_frame_cannot():
     found = psf_distance(res.psfs[0], hs[0])[0]
     assert start > 1.2
     assert found < 0.7 and found < 0.5 * start, (found, start)
-    # every frame's PSF is the found phase plus its own offset
-    for h, t in zip(res.psfs, div):
-        np.testing.assert_allclose(h, psf(A, res.phase + t, pad=2))
+    # the defocused frames' PSFs are found too (the truth's, not only the model's own consistency)
+    for h, truth in zip(res.psfs[1:], hs[1:]):
+        assert psf_distance(h, truth)[0] < 0.5 * psf_distance(psf(A, div[1], pad=2), truth)[0]
     assert res.object.shape == (96, 96) and np.all(res.object >= 0)
+    # each stage starts where the last ended, so the likelihood never gets worse
     nlls = [h[1] for h in res.history]
-    assert all(b <= a + 1e-6 * abs(a) for a, b in zip(nlls, nlls[1:]))
+    assert all(b <= a * (1 + 1e-9) for a, b in zip(nlls, nlls[1:])), nlls
     held = phase_diversity(
         frames,
         div,
@@ -96,7 +97,8 @@ def test_phase_diversity_finds_the_turbulent_psf_that_one_frame_cannot():
         iterations=80,
         phase0=np.where(A > 0, screen, 0.0),
     )
-    assert psf_distance(held.psfs[0], hs[0])[0] < 0.4
+    kept = psf_distance(held.psfs[0], hs[0])[0]
+    assert kept < 0.4 and kept < found, (kept, found)
 
 
 def test_phase_diversity_stays_finite_on_zero_photon_frames():
@@ -105,7 +107,8 @@ def test_phase_diversity_stays_finite_on_zero_photon_frames():
     div = np.stack([np.zeros((16, 16)), defocus_phase(A, 1.0)])
     sparse = np.zeros((2, 32, 32))
     sparse[:, 10:20, 10:20] = np.random.default_rng(0).poisson(3, (2, 10, 10))
-    for frames, noise in ((np.zeros((2, 32, 32)), 0.0), (sparse, 5.0)):
+    negative = sparse + np.random.default_rng(1).normal(0.0, 5.0, sparse.shape)  # dark-subtracted
+    for frames, noise in ((np.zeros((2, 32, 32)), 0.0), (sparse, 5.0), (negative, 0.0)):
         res = phase_diversity(frames, div, A, read_noise=noise, smoothing=(2, 0), iterations=5)
         for a in (res.phase, res.psfs, res.object):
             assert np.all(np.isfinite(a))
@@ -117,6 +120,7 @@ def test_phase_diversity_refuses_bad_input():
     A = circular_pupil(16, 8)
     frames = np.ones((2, 32, 32))
     div = np.zeros((2, 16, 16))
+    div[1] = defocus_phase(A, 1.0)
     with pytest.raises(ValueError, match="F >= 2"):
         phase_diversity(frames[:1], div[:1], A)
     with pytest.raises(ValueError, match="diversity must be one phase offset"):
@@ -135,3 +139,14 @@ def test_phase_diversity_refuses_bad_input():
         phase_diversity(frames, div, A, phase0=np.zeros((8, 8)))
     with pytest.raises(ValueError, match="frames"):
         phase_diversity(np.full((2, 32, 32), np.nan), div, A)
+    defocus = np.stack([np.zeros((16, 16)), defocus_phase(A, 1.0)])
+    with pytest.raises(ValueError, match="diversity: every frame has the same phase offset"):
+        phase_diversity(frames, np.zeros((2, 16, 16)), A)
+    with pytest.raises(ValueError, match=r"gains must be one number or one per frame \(2\)"):
+        phase_diversity(frames, defocus, A, gains=[1.0, 0.5, 0.5])
+    with pytest.raises(ValueError, match="read_noise must be one number"):
+        phase_diversity(frames, defocus, A, read_noise=[1.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="pupil must be a square 2-D aperture amplitude"):
+        phase_diversity(frames, defocus, -A)
+    with pytest.raises(ValueError, match="pad = 0 is too small"):
+        phase_diversity(np.ones((2, 16, 16)), defocus, A, pad=0)
