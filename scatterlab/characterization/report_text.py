@@ -313,9 +313,9 @@ def _failure_notes(results, checks, ideal) -> list:
             "restoration classifies its 50-degree images at 0.010-0.047 against the no-turbulence "
             "classification after 600 iterations, and no blind estimate from one frame tried so far "
             "gets near that. Two defocused cameras beside the polarimeter (phase diversity, "
-            "`scatterlab.deconvolution.phase_diversity`) do identify the PSF: on the default scene's "
-            "aluminium they classified at 0.038 (D/r0 7.9) and 0.083 (12.9) after 2000 iterations, the "
-            "true PSF at 0.023 and 0.036; this scene does not simulate them "
+            "`scatterlab.deconvolution.phase_diversity`) identify it at D/r0 7.9: on the default "
+            "scene's aluminium they classified at 0.032 after 2000 iterations (true PSF 0.023), at 12.9 "
+            "not yet (0.131; true PSF 0.036). This scene does not simulate them "
             "(`docs/characterization_accuracy.md`)."
         )
     # the calibrated statements: the paint's marginal intervals and every joint region (a metal's
