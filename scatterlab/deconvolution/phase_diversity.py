@@ -98,11 +98,12 @@ class _Likelihood:
         self.shape = (H + 2 * pad, W + 2 * pad)
         self.mask = np.zeros(self.shape)
         self.mask[pad : pad + H, pad : pad + W] = 1.0
-        self.data = np.zeros((F,) + self.shape)
-        self.data[:, pad : pad + H, pad : pad + W] = frames
         self.diversity, self.gains, self.offsets = diversity, gains, offsets
         # the data plus the read-noise offset (Snyder), which a dark-subtracted frame can push below 0
-        self.shifted = np.maximum(self.data + offsets[:, None, None], 0.0) * self.mask
+        self.shifted = np.zeros((F,) + self.shape)
+        self.shifted[:, pad : pad + H, pad : pad + W] = np.maximum(
+            frames + offsets[:, None, None], 0.0
+        )
         self.model = PupilPhasePSF(pupil, self.shape, np.ones(self.shape, bool))
 
     def _otf(self, h):
@@ -241,8 +242,9 @@ def phase_diversity(
     Raises
     ------
     ValueError
-        Fewer than two frames, shapes that do not match, non-finite data, gains not > 0, negative read
-        noise, a bad ``pad``, ``smoothing`` or ``iterations``.
+        Fewer than two frames, shapes that do not match, non-finite data, the same offset in every
+        frame, a negative pupil, gains not > 0, negative read noise, ``gains`` or ``read_noise`` of
+        the wrong length, a ``pad`` too small for the PSF, a bad ``smoothing`` or ``iterations``.
     """
     from scipy.ndimage import gaussian_filter
     from scipy.optimize import minimize
@@ -288,9 +290,8 @@ def phase_diversity(
         phase = phase + np.where(inside, smooth(res.x[:npx].reshape(n, n)), 0.0)
         obj = c * res.x[npx:].reshape(like.shape)
         history.append((width, float(res.fun / scale), int(res.status)))
-    nll = like(phase, obj)[0]
     psfs = np.stack([pupil_psf(A, phase + t, pad=2) for t in theta])
-    return PhaseDiversityResult(phase, psfs, obj, float(nll), history)
+    return PhaseDiversityResult(phase, psfs, obj, history[-1][1], history)
 
 
 def _as_phase(value, shape) -> np.ndarray:
