@@ -9,6 +9,11 @@ periodic simulation. The channels are imaged through the diffraction-limited pup
 one Kolmogorov phase screen per D/r0 (tilt kept, shared by all channels: a division-of-amplitude polarimeter),
 then detected with shot and read noise.
 
+With ``phase_diversity_waves`` > 0 in the scene, a beam splitter sends ``phase_diversity_share`` of the light
+to two unpolarized cameras defocused by +/- that many waves (peak to valley), which record the same instant
+through the same screen: the frames :func:`scatterlab.deconvolution.phase_diversity` identifies the PSF from.
+The polarimeter keeps the rest of the light (its counts fall by the share).
+
 :class:`Ideal` switches parts of the chain to their ideal version, for the error budget
 (``studies/characterization_error_budget.py``): noise-free counts, no optics at all (no halo, no edge mixing),
 no foreshortening, the true PSF given to the restoration, perfect registration, true classes.
@@ -81,6 +86,14 @@ class Acquisition:
         coordinates.
     foreshortened : bool
         Whether the camera saw the plate foreshortened (False with ``Ideal(foreshortening=True)``).
+    diversity_counts : ndarray, shape (2, H, W), or None
+        Dark-subtracted counts of the defocused cameras [photo-electrons] (None: no phase diversity).
+    diversity_phases : ndarray, shape (2, H/2, H/2), or None
+        Their known pupil-phase offsets [rad] (+/- ``phase_diversity_waves`` of defocus).
+    diversity_share : float
+        Share of the light the beam splitter sends to the two cameras together (0: none).
+    read_noise : float
+        Read noise per read [e- rms] (each image and its dark frame are read once).
     """
 
     theta: float
@@ -93,6 +106,10 @@ class Acquisition:
     truth_s0: np.ndarray
     truth_dolp: np.ndarray
     foreshortened: bool = True
+    diversity_counts: np.ndarray | None = None
+    diversity_phases: np.ndarray | None = None
+    diversity_share: float = 0.0
+    read_noise: float = 0.0
 
 
 def plate_scene(plate, labels, theta):
@@ -132,21 +149,22 @@ def _field_psf(pupil, screen, shape):
 
 
 def _camera_psf(pupil, d_over_r0, psf, ideal: Ideal, shape, rng):
-    """The PSF that blurs the camera field ``shape``: a given one, none (``ideal.optics``), the
-    diffraction-limited pupil's, or the pupil's through one new Kolmogorov screen of ``d_over_r0``."""
+    """The PSF that blurs the camera field ``shape`` and the screen [rad] it was made with: a given PSF,
+    none (``ideal.optics``), the diffraction-limited pupil's, or the pupil's through one new Kolmogorov
+    screen of ``d_over_r0`` (the screen is None when there is none)."""
     from scatterlab.deconvolution import resample_psf
     from scatterlab.imaging import phase_screen
 
     if psf is not None:
-        return resample_psf(np.clip(np.asarray(psf, float), 0, None), shape)
+        return resample_psf(np.clip(np.asarray(psf, float), 0, None), shape), None
     n = pupil.shape[0]
     # the screen is drawn even when the optics are ideal: the noise that follows keeps its draws
     screen = None if d_over_r0 is None else phase_screen(n, 1.0, n / d_over_r0, rng)
     if ideal.optics:
         h = np.zeros(shape)
         h[shape[0] // 2, shape[1] // 2] = 1.0
-        return h
-    return _field_psf(pupil, screen, shape)
+        return h, screen
+    return _field_psf(pupil, screen, shape), screen
 
 
 def acquire(
@@ -173,14 +191,16 @@ def acquire(
     ideal : Ideal
         ``noise``, ``optics`` and ``foreshortening`` act here.
     psf : ndarray, shape (H, W), optional
-        Blur with this centred PSF instead of the one of the pupil and screen (re-simulation of an estimate).
+        Blur with this centred PSF instead of the one of the pupil and screen (re-simulation of an estimate;
+        no defocused cameras then).
 
     Returns
     -------
     Acquisition
     """
     from scatterlab.characterization.registration import foreshorten
-    from scatterlab.imaging import channel_images, circular_pupil, detect, render_stokes
+    from scatterlab.imaging import channel_images as channels_of
+    from scatterlab.imaging import circular_pupil, detect, render_stokes
     from scatterlab.polarization import signed_dolp
 
     labels = np.asarray(labels)
@@ -194,13 +214,38 @@ def acquire(
     S_cam = render_stokes(plate_scene(plate, seen, theta))
     n = H // 2
     pupil = circular_pupil(n, n / 2)
-    h_wide = _camera_psf(pupil, d_over_r0, psf, ideal, seen.shape, rng)
-    channels = channel_images(S_cam, angles, h_wide)[:, my : my + H, mx : mx + W]
-    channels = np.clip(channels, 0.0, None)  # FFT round-off below zero
-    if ideal.noise:
-        counts = cfg.photons * channels / channels.max()
-    else:
-        counts = detect(channels, rng, photons=cfg.photons, read_noise=cfg.read_noise)
+    h_wide, screen = _camera_psf(pupil, d_over_r0, psf, ideal, seen.shape, rng)
+    crop = (slice(None), slice(my, my + H), slice(mx, mx + W))
+    channels = np.clip(channels_of(S_cam, angles, h_wide)[crop], 0.0, None)  # FFT round-off
+    # the brightest channel pixel gets cfg.photons without a beam splitter; the polarimeter keeps 1 - share
+    share = cfg.phase_diversity_share if _has_diversity(cfg, d_over_r0, psf, ideal) else 0.0
+    unit = channels.max()
+
+    def detected(images):
+        if ideal.noise:
+            return cfg.photons * images / unit
+        return detect(images, rng, photons=cfg.photons, read_noise=cfg.read_noise, scale=unit)
+
+    counts = detected((1.0 - share) * channels)
+    div_counts = div_phases = None
+    if share > 0:
+        from scatterlab.deconvolution import defocus_phase
+
+        w = cfg.phase_diversity_waves
+        div_phases = np.stack([defocus_phase(pupil, w), defocus_phase(pupil, -w)])
+        # each camera records share / 2 of all the light the polarimeter's channels record together
+        div_counts = np.stack(
+            [
+                detected(
+                    0.5
+                    * share
+                    * channels_of(S_cam, angles, _field_psf(pupil, screen + t, seen.shape))[
+                        crop
+                    ].sum(0, keepdims=True)
+                )[0]
+                for t in div_phases
+            ]
+        )
     from scatterlab.deconvolution import resample_psf
 
     psf_true = resample_psf(h_wide, (H, W))
@@ -216,4 +261,15 @@ def acquire(
         truth_s0=S_obj[..., 0],
         truth_dolp=truth_dolp,
         foreshortened=not ideal.foreshortening,
+        diversity_counts=div_counts,
+        diversity_phases=div_phases,
+        diversity_share=share,
+        read_noise=float(cfg.read_noise),
     )
+
+
+def _has_diversity(cfg, d_over_r0, psf, ideal: Ideal) -> bool:
+    """Whether this acquisition has defocused cameras: turbulence, a scene that asks for them, real optics
+    and the pupil's own PSF (not a given one)."""
+    waves = getattr(cfg, "phase_diversity_waves", 0.0)
+    return d_over_r0 is not None and waves > 0 and psf is None and not ideal.optics

@@ -10,7 +10,8 @@ Three kinds of image come out of an acquisition:
     the paint's DOLP by 0.1-0.2 (0.66 instead of 0.88 at 50 deg; ``studies/characterization_error_budget.py``);
 ``corrected``
     a turbulent image deconvolved blindly (EM started from a random Kolmogorov PSF as in Sec. 5.3.2, Schulz
-    pupil PSFs by default).
+    pupil PSFs by default); or, when the acquisition has defocused cameras, deconvolved with the PSF that
+    phase diversity finds from them (:func:`scatterlab.deconvolution.phase_diversity`).
 
 The DOLP passed to the inversion is always the maximum-likelihood one (no priors): the DOLP priors of
 Eq. 195 pull each pixel toward its class centre, which is right for classifying and wrong for measuring.
@@ -38,6 +39,7 @@ __all__ = [
     "degraded",
     "signed_dolp",
     "KNOWN_PSF_ITERATIONS",
+    "phase_diversity_psf",
 ]
 
 KNOWN_PSF_ITERATIONS = 100
@@ -52,6 +54,11 @@ LAYOUT_FINAL_ITERATIONS = 600
 # pure interiors (edge band 2) identify the paint's DOLP but brought the PSFs only to 1.00-1.02 (0.033)
 # (docs/characterization_accuracy.md)
 LAYOUT_FRAMES_ROUNDS = 30
+# acquisitions with defocused cameras (scene key phase_diversity_waves): the phase-diversity fit's stages
+# (Gaussian widths [pupil pixels]) and L-BFGS iterations per stage, then known-PSF iterations with its PSF
+PHASE_DIVERSITY_SMOOTHING = (8.0, 6.0, 4.0, 3.0, 2.0, 1.0, 0.5)
+PHASE_DIVERSITY_ITERATIONS = 300
+PHASE_DIVERSITY_FINAL_ITERATIONS = 2000
 
 
 @dataclass
@@ -171,6 +178,20 @@ def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int
     h.update(np.ascontiguousarray(acq.angles).tobytes())
     if ideal.psf or acq.d_over_r0 is None:
         h.update(np.ascontiguousarray(acq.psf_true).tobytes())
+    if acq.diversity_counts is not None:  # the cameras' frames and the fit's constants
+        h.update(np.ascontiguousarray(acq.diversity_counts).tobytes())
+        h.update(np.ascontiguousarray(acq.diversity_phases).tobytes())
+        h.update(
+            repr(
+                (
+                    acq.diversity_share,
+                    acq.read_noise,
+                    PHASE_DIVERSITY_SMOOTHING,
+                    PHASE_DIVERSITY_ITERATIONS,
+                    PHASE_DIVERSITY_FINAL_ITERATIONS,
+                )
+            ).encode()
+        )
     pri = tuple((p.c2, p.c3, p.m, p.name) for p in settings.priors or ())
     h.update(
         repr(
@@ -198,11 +219,55 @@ def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int
     return h.hexdigest()[:24]
 
 
+def phase_diversity_psf(acq: Acquisition) -> np.ndarray:
+    """The PSF of a turbulent acquisition found by phase diversity from its defocused cameras.
+
+    The frames are the polarimeter's channel sum (in focus) and the two defocused cameras, with gains in the
+    proportion of the light each gets and the read noise of their dark-subtracted pixels
+    (:func:`scatterlab.deconvolution.phase_diversity`, stages :data:`PHASE_DIVERSITY_SMOOTHING`,
+    :data:`PHASE_DIVERSITY_ITERATIONS` iterations each).
+
+    Parameters
+    ----------
+    acq : Acquisition
+        With ``diversity_counts``.
+
+    Returns
+    -------
+    ndarray, shape (H, H)
+        The in-focus PSF (centred, unit sum, 2 pixels per lambda/D).
+    """
+    from scatterlab.deconvolution import phase_diversity
+
+    if acq.diversity_counts is None:
+        raise ValueError("acq has no defocused cameras (diversity_counts is None)")
+    K = acq.counts.shape[0]
+    share = acq.diversity_share
+    frames = np.concatenate([acq.counts.sum(axis=0)[None], acq.diversity_counts])
+    offsets = np.concatenate([np.zeros((1,) + acq.pupil.shape), acq.diversity_phases])
+    cams = len(acq.diversity_counts)
+    gains = np.array([1.0 - share] + [share / cams] * cams)
+    # a dark-subtracted pixel is read twice; the focused frame sums K channels
+    read_noise = acq.read_noise * np.sqrt(2.0 * np.array([K] + [1] * cams))
+    fit = phase_diversity(
+        frames,
+        offsets,
+        acq.pupil,
+        gains=gains,
+        read_noise=read_noise,
+        smoothing=PHASE_DIVERSITY_SMOOTHING,
+        iterations=PHASE_DIVERSITY_ITERATIONS,
+    )
+    return fit.psfs[0]
+
+
 def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int):
     """ML deconvolution, then a short continuation with the priors for the classes (PSF held fixed)."""
     from scatterlab.deconvolution import blind_deconvolve, initial_psf, object_grid, resample_psf
 
     H, W = acq.counts.shape[1:]
+    diversity = not known_psf and acq.diversity_counts is not None
+    known_psf = known_psf or diversity
     # a known PSF is used whole (its Airy tail carries a few per cent of the metal's light onto the paint, as
     # much as the paint's own signal); a blind estimate is confined to a quarter of the field
     # (the whole H x H square: cutting its corners drops ~0.2 % of the light, 2 % of the paint's S0 under a
@@ -211,7 +276,9 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     grid = object_grid((H, W), radius, pad=pad)
     F = settings.frames
     kw = dict(psf_radius=radius, pad=pad, pupil=acq.pupil, frames=F)
-    if known_psf:  # one known PSF, the same for every frame
+    if diversity:  # the PSF phase diversity finds, then held fixed
+        psf0, mode = resample_psf(phase_diversity_psf(acq), grid), "fixed"
+    elif known_psf:  # one known PSF, the same for every frame
         psf0, mode = resample_psf(acq.psf_true, grid), "fixed"
     elif F == 1:
         psf0, mode = initial_psf(acq.pupil, grid, rng=seed), settings.psf_model
@@ -222,6 +289,8 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     # with a known PSF the EM is Richardson-Lucy on the Stokes images: cheap per iteration, slow to pull the
     # metal's halo back out of the paint, so it gets at least KNOWN_PSF_ITERATIONS
     its = max(settings.iterations, KNOWN_PSF_ITERATIONS) if known_psf else settings.iterations
+    if diversity:
+        its = PHASE_DIVERSITY_FINAL_ITERATIONS
     ml = blind_deconvolve(acq.counts, acq.angles, psf0=psf0, psf_mode=mode, iterations=its, **kw)
     if not known_psf and settings.psf_refine == "layout":
         from scatterlab.deconvolution import layout_psf

@@ -17,6 +17,11 @@ psf_model = "pupil"                   # PSF update: "pupil" (Schulz, GS steps) o
 psf_refine = "none"                   # "layout": refine each blind PSF with a few-material object
                                       # (scatterlab.deconvolution.layout_psf), then restore with it known;
                                       # about 10x the time of a blind restoration
+phase_diversity_waves = 0.0           # > 0: two unpolarized cameras defocused by +/- this many waves (peak
+                                      # to valley) record each turbulent exposure, and the PSF is found by
+                                      # phase diversity (scatterlab.deconvolution.phase_diversity), then the
+                                      # image restored with it known; 0: blind deconvolution
+phase_diversity_share = 0.3333        # share of the light the beam splitter sends to those two cameras
 priors = "ch7"                        # DOLP prior set for the classification (ch5, ch6, ch7) or "none"
 estimate = ["classes", "n_kappa", "posterior"]   # what to compute (leave out what is not needed)
 sigma_known = 0.3                     # roughness used by the n, kappa inversion (the reference measured it)
@@ -102,6 +107,8 @@ class SceneConfig:
     iterations: int = 150
     psf_model: str = "pupil"
     psf_refine: str = "none"
+    phase_diversity_waves: float = 0.0
+    phase_diversity_share: float = 0.3333
     priors: str = "ch7"
     estimate: list = field(default_factory=lambda: list(ESTIMATES))
     sigma_known: float = 0.3
@@ -217,6 +224,8 @@ def _check_ranges(cfg: SceneConfig) -> None:
         raise ValueError(f"psf_model must be 'em' or 'pupil', got {cfg.psf_model!r}")
     if cfg.psf_refine not in ("none", "layout"):
         raise ValueError(f"psf_refine must be 'none' or 'layout', got {cfg.psf_refine!r}")
+    _finite(cfg, "phase_diversity_waves", 0, 10)
+    _finite(cfg, "phase_diversity_share", 0, 0.9, lo_open=True)
     if not 1 <= cfg.iterations <= 100000:
         raise ValueError(f"iterations must be in [1, 100000], got {cfg.iterations}")
     if not 100 <= cfg.posterior_steps <= 10**6:
