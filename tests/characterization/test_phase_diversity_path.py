@@ -138,3 +138,13 @@ def test_scene_keys_of_the_cameras_are_checked(tmp_path, text, key):
     p.write_text(text + "\n")
     with pytest.raises(ValueError, match=key):
         load_scene(p)
+
+
+def test_the_report_says_how_the_turbulent_psfs_were_found():
+    from scatterlab.characterization.report_text import _header
+
+    text = "\n".join(_header(scene(phase_diversity_share=0.25), 1.0, Ideal()))
+    assert "phase diversity" in text and "+-1 waves" in text and "25% of the light" in text
+    assert "EM iterations" not in text
+    text = "\n".join(_header(scene(phase_diversity_waves=0.0), 1.0, Ideal()))
+    assert "phase diversity" not in text and "5 EM iterations (pupil PSFs)" in text
