@@ -30,6 +30,11 @@ import numpy as np
 
 __all__ = ["defocus_phase", "phase_diversity", "PhaseDiversityResult"]
 
+# L-BFGS-B's memory (corrections kept). Its own work per iteration grows with it and, with 10^5 variables,
+# exceeded the likelihood's at 20; on the default scene's aluminium at D/r0 7.9 (7 stages of 300
+# iterations) 5 and 10 reached PSF L1 0.137, 20 reached 0.18 in about twice the time
+LBFGS_MEMORY = 5
+
 
 def defocus_phase(pupil, waves: float) -> np.ndarray:
     r"""A defocus of ``waves`` waves peak to valley over the aperture: :math:`\pi w (2\rho^2 - 1)`.
@@ -247,7 +252,7 @@ def phase_diversity(
         the wrong length, a ``pad`` too small for the PSF, a bad ``smoothing`` or ``iterations``.
     """
     from scipy.ndimage import gaussian_filter
-    from scipy.optimize import minimize
+    from scipy.optimize import Bounds, minimize
 
     from scatterlab.imaging import psf as pupil_psf
 
@@ -278,14 +283,15 @@ def phase_diversity(
             return nll * scale, np.concatenate([g_free.ravel(), c * g_o.ravel()]) * scale
 
         x0 = np.concatenate([np.zeros(npx), obj.ravel() / c])
-        bounds = [(None, None)] * npx + [(0.0, None)] * no
+        # arrays, not a list of pairs: scipy converts 10^5 pairs one by one on every stage
+        bounds = Bounds(np.r_[np.full(npx, -np.inf), np.zeros(no)], np.inf)
         res = minimize(
             objective,
             x0,
             jac=True,
             method="L-BFGS-B",
             bounds=bounds,
-            options={"maxiter": iterations, "maxcor": 20},
+            options={"maxiter": iterations, "maxcor": LBFGS_MEMORY},
         )
         phase = phase + np.where(inside, smooth(res.x[:npx].reshape(n, n)), 0.0)
         obj = c * res.x[npx:].reshape(like.shape)
