@@ -199,6 +199,7 @@ def acquire(
     Acquisition
     """
     from scatterlab.characterization.registration import foreshorten
+    from scatterlab.characterization.scene_config import diversity_waves
     from scatterlab.imaging import channel_images as channels_of
     from scatterlab.imaging import circular_pupil, detect, render_stokes
     from scatterlab.polarization import signed_dolp
@@ -231,7 +232,7 @@ def acquire(
     if share > 0:
         from scatterlab.deconvolution import defocus_phase
 
-        w = cfg.phase_diversity_waves
+        w = diversity_waves(cfg, d_over_r0)
         div_phases = np.stack([defocus_phase(pupil, w), defocus_phase(pupil, -w)])
         # each camera records share / 2 of all the light the polarimeter's channels record together
         div_counts = np.stack(
@@ -271,5 +272,7 @@ def acquire(
 def _has_diversity(cfg, d_over_r0, psf, ideal: Ideal) -> bool:
     """Whether this acquisition has defocused cameras: turbulence, a scene that asks for them, real optics
     and the pupil's own PSF (not a given one)."""
-    waves = getattr(cfg, "phase_diversity_waves", 0.0)
-    return d_over_r0 is not None and waves > 0 and psf is None and not ideal.optics
+    from scatterlab.characterization.scene_config import diversity_waves
+
+    waves = diversity_waves(cfg, d_over_r0)
+    return waves > 0 and psf is None and not ideal.optics

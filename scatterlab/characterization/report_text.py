@@ -30,10 +30,16 @@ def _header(cfg, seconds, ideal) -> list:
 
 def _psf_estimator(cfg) -> str:
     """How the turbulent images' PSFs were found, for the header."""
-    if cfg.phase_diversity_waves > 0:
+    if _uses_diversity(cfg):
+        waves = cfg.phase_diversity_waves
+        per = (
+            ", ".join(f"+-{w:g} at D/r0 {d:g}" for w, d in zip(waves, cfg.d_over_r0))
+            if isinstance(waves, list)
+            else f"+-{waves:g}"
+        )
         return (
-            f"PSFs by phase diversity (two unpolarized cameras defocused by +-{cfg.phase_diversity_waves:g} "
-            f"waves, {cfg.phase_diversity_share:.0%} of the light), then known-PSF EM"
+            f"PSFs by phase diversity (two unpolarized cameras defocused by {per} waves, "
+            f"{cfg.phase_diversity_share:.0%} of the light), then known-PSF EM"
         )
     refined = ", refined with a few-material object" if cfg.psf_refine == "layout" else ""
     return f"{cfg.iterations} EM iterations ({cfg.psf_model} PSFs{refined})"
@@ -299,7 +305,12 @@ def report_markdown(cfg, results, checks, *, seconds, ideal) -> str:
 
 
 def _estimate_name(cfg) -> str:
-    return "phase-diversity" if cfg.phase_diversity_waves > 0 else "blind"
+    return "phase-diversity" if _uses_diversity(cfg) else "blind"
+
+
+def _uses_diversity(cfg) -> bool:
+    waves = cfg.phase_diversity_waves
+    return any(w > 0 for w in (waves if isinstance(waves, list) else [waves]))
 
 
 def _failure_notes(results, checks, ideal, estimate="blind") -> list:

@@ -18,7 +18,8 @@ psf_refine = "none"                   # "layout": refine each blind PSF with a f
                                       # (scatterlab.deconvolution.layout_psf), then restore with it known;
                                       # about 10x the time of a blind restoration
 phase_diversity_waves = 0.0           # > 0: two unpolarized cameras defocused by +/- this many waves (peak
-                                      # to valley) record each turbulent exposure, and the PSF is found by
+                                      # to valley; or a list, one per d_over_r0, 0 for none at that strength)
+                                      # record each turbulent exposure, and the PSF is found by
                                       # phase diversity (scatterlab.deconvolution.phase_diversity), then the
                                       # image restored with it known; 0: blind deconvolution
 phase_diversity_share = 0.3333        # share of the light the beam splitter sends to those two cameras
@@ -52,7 +53,14 @@ import math
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
-__all__ = ["SceneConfig", "Plate", "default_scene", "load_scene", "plate_labels"]
+__all__ = [
+    "SceneConfig",
+    "Plate",
+    "default_scene",
+    "diversity_waves",
+    "load_scene",
+    "plate_labels",
+]
 
 ESTIMATES = ("classes", "n_kappa", "posterior")
 MAX_IMAGE_SIZE = (
@@ -107,7 +115,7 @@ class SceneConfig:
     iterations: int = 150
     psf_model: str = "pupil"
     psf_refine: str = "none"
-    phase_diversity_waves: float = 0.0
+    phase_diversity_waves: float | list = 0.0
     phase_diversity_share: float = 0.3333
     priors: str = "ch7"
     estimate: list = field(default_factory=lambda: list(ESTIMATES))
@@ -156,6 +164,15 @@ def _check_types(obj, where: str = "") -> None:
         v = getattr(obj, f.name)
         if f.name == "plates" or (f.name == "region_margin_px" and v is None):
             continue
+        if (
+            f.name == "phase_diversity_waves"
+        ):  # a number or a list of numbers (checked with the ranges)
+            if not (_is(v, float) or (isinstance(v, list) and all(_is(x, float) for x in v))):
+                raise ValueError(
+                    f"{prefix}{f.name} must be a float or a list of floats (one per d_over_r0), "
+                    f"got {v!r}"
+                )
+            continue
         if f.name in _LISTS:
             kind = _LISTS[f.name]
             ok = isinstance(v, list) and all(_is(x, kind) for x in v)
@@ -185,6 +202,8 @@ def _finite(cfg, name, lo, hi, *, lo_open=False):
 
 
 def _check_ranges(cfg: SceneConfig) -> None:
+    import numpy as np
+
     if not (16 <= cfg.image_size <= MAX_IMAGE_SIZE and cfg.image_size % 2 == 0):
         raise ValueError(
             f"image_size must be an even number of pixels in [16, {MAX_IMAGE_SIZE}] "
@@ -212,8 +231,6 @@ def _check_ranges(cfg: SceneConfig) -> None:
             f"plate_center must be [row, column] in template units within [0, 16], "
             f"got {cfg.plate_center}"
         )
-    import numpy as np
-
     a = np.mod(np.radians(cfg.polarizer_deg), np.pi)
     if len(np.unique(np.round(a, 9))) < 3 or not all(math.isfinite(x) for x in cfg.polarizer_deg):
         raise ValueError(
@@ -224,7 +241,14 @@ def _check_ranges(cfg: SceneConfig) -> None:
         raise ValueError(f"psf_model must be 'em' or 'pupil', got {cfg.psf_model!r}")
     if cfg.psf_refine not in ("none", "layout"):
         raise ValueError(f"psf_refine must be 'none' or 'layout', got {cfg.psf_refine!r}")
-    _finite(cfg, "phase_diversity_waves", 0, 10)
+    waves = cfg.phase_diversity_waves
+    if isinstance(waves, list) and len(waves) != len(cfg.d_over_r0):
+        raise ValueError(
+            f"phase_diversity_waves must have one entry per d_over_r0 ({len(cfg.d_over_r0)}), "
+            f"got {len(waves)}"
+        )
+    if not all(math.isfinite(w) and 0 <= w <= 10 for w in np.atleast_1d(waves)):
+        raise ValueError(f"phase_diversity_waves must be in [0, 10] waves, got {waves!r}")
     _finite(cfg, "phase_diversity_share", 0, 0.9, lo_open=True)
     if not 1 <= cfg.iterations <= 100000:
         raise ValueError(f"iterations must be in [1, 100000], got {cfg.iterations}")
@@ -247,6 +271,29 @@ def _check_ranges(cfg: SceneConfig) -> None:
         raise ValueError(f"estimate entries must be among {ESTIMATES}, got {sorted(bad)}")
     if "n_kappa" in cfg.estimate and len(cfg.geometry_deg) < 2:
         raise ValueError("geometry_deg: estimating n and kappa needs at least two geometries")
+
+
+def diversity_waves(cfg: SceneConfig, d_over_r0) -> float:
+    """The defocus [waves, peak to valley] of the phase-diversity cameras at turbulence ``d_over_r0``.
+
+    Parameters
+    ----------
+    cfg : SceneConfig
+    d_over_r0 : float or None
+        One of ``cfg.d_over_r0`` (None: no turbulence, no cameras).
+
+    Returns
+    -------
+    float
+        0 when there are no cameras.
+    """
+    waves = cfg.phase_diversity_waves
+    if d_over_r0 is None or not waves:
+        return 0.0
+    if not isinstance(waves, list):
+        return float(waves)
+    matches = [w for w, d in zip(waves, cfg.d_over_r0) if d == d_over_r0]
+    return float(matches[0]) if matches else 0.0
 
 
 def default_scene() -> SceneConfig:

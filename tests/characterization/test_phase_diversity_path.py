@@ -56,6 +56,21 @@ def test_the_defocused_cameras_see_the_same_instant_with_their_share_of_the_ligh
     assert _acq(scene(), ideal=Ideal(optics=True)).diversity_counts is None
 
 
+def test_the_defocus_can_grow_with_the_turbulence():
+    """One defocus per D/r0: +-2 waves at 12.9 spread the cameras' light more than +-1 at 5 (the Zernike
+    defocus's peak-to-valley sets the blur), and 0 turns the cameras off for that strength."""
+    from scatterlab.characterization.scene_config import diversity_waves
+
+    cfg = scene(d_over_r0=[5.0, 12.9, 3.0], phase_diversity_waves=[1.0, 2.0, 0.0])
+    assert diversity_waves(cfg, 12.9) == 2.0 and diversity_waves(cfg, 5.0) == 1.0
+    assert diversity_waves(cfg, None) == 0.0
+    acq = _acq(cfg, d_over_r0=12.9)
+    inside = acq.pupil > 0
+    spread = acq.diversity_phases[0][inside]
+    assert spread.max() - spread.min() == pytest.approx(2 * 2 * np.pi, rel=0.1)
+    assert _acq(cfg, d_over_r0=3.0).diversity_counts is None
+
+
 def test_noisy_cameras_carry_shot_and_read_noise():
     """The same seed draws the same screen: the noisy cameras scatter about the noise-free ones with the
     variance of Poisson counts plus two reads (image and dark frame)."""
@@ -129,6 +144,8 @@ def test_a_clear_image_has_no_phase_diversity_to_use():
         ("phase_diversity_waves = -1.0", "phase_diversity_waves"),
         ("phase_diversity_waves = 11.0", "phase_diversity_waves"),
         ('phase_diversity_waves = "1"', "phase_diversity_waves"),
+        ("phase_diversity_waves = [1.0]", "one entry per d_over_r0"),
+        ("phase_diversity_waves = [1.0, -2.0]", "phase_diversity_waves"),
         ("phase_diversity_share = 0.0", "phase_diversity_share"),
         ("phase_diversity_share = 0.95", "phase_diversity_share"),
     ],
@@ -146,5 +163,7 @@ def test_the_report_says_how_the_turbulent_psfs_were_found():
     text = "\n".join(_header(scene(phase_diversity_share=0.25), 1.0, Ideal()))
     assert "phase diversity" in text and "+-1 waves" in text and "25% of the light" in text
     assert "EM iterations" not in text
+    two = scene(d_over_r0=[7.9, 12.9], phase_diversity_waves=[1.0, 2.0])
+    assert "+-1 at D/r0 7.9, +-2 at D/r0 12.9 waves" in "\n".join(_header(two, 1.0, Ideal()))
     text = "\n".join(_header(scene(phase_diversity_waves=0.0), 1.0, Ideal()))
     assert "phase diversity" not in text and "5 EM iterations (pupil PSFs)" in text
