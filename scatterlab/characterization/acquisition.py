@@ -237,14 +237,8 @@ def acquire(
         # each camera records share / 2 of all the light the polarimeter's channels record together
         div_counts = np.stack(
             [
-                detected(
-                    0.5
-                    * share
-                    * channels_of(S_cam, angles, _field_psf(pupil, screen + t, seen.shape))[
-                        crop
-                    ].sum(0, keepdims=True)
-                )[0]
-                for t in div_phases
+                detected(0.5 * share * channels_of(S_cam, angles, h).sum(0, keepdims=True)[crop])[0]
+                for h in (_field_psf(pupil, screen + t, seen.shape) for t in div_phases)
             ]
         )
     from scatterlab.deconvolution import resample_psf
