@@ -246,12 +246,21 @@ def run(ctx):
         "blind_em_iterations": iterations,
     }
 
+    def pick(d_r0, method, its=None):
+        """The row of ``method`` at ``d_r0`` (and ``its`` iterations per stage)."""
+        return next(
+            r
+            for r in rows
+            if r["d_over_r0"] == d_r0
+            and r["method"] == method
+            and (its is None or r["iterations"] == its)
+        )
+
     pyplot = plt()
     fig, ax = pyplot.subplots(1, 2, figsize=(10, 4), layout="constrained")
     for d_r0 in strengths:
         pd = [r for r in rows if r["d_over_r0"] == d_r0 and r["method"] == "phase diversity"]
-        em = next(r for r in rows if r["d_over_r0"] == d_r0 and r["method"] == "blind EM")
-        tp = next(r for r in rows if r["d_over_r0"] == d_r0 and r["method"] == "true PSF")
+        em, tp = pick(d_r0, "blind EM"), pick(d_r0, "true PSF")
         (line,) = ax[0].plot(
             [r["seconds"] for r in pd],
             [r["psf_l1_error"] for r in pd],
@@ -259,6 +268,8 @@ def run(ctx):
             label=f"phase diversity, D/r0 = {d_r0:g}",
         )
         ax[0].plot(em["seconds"], em["psf_l1_error"], "x", ms=9, color=line.get_color())
+        warm = pick(d_r0, "phase diversity from the true phase")
+        ax[0].plot(warm["seconds"], warm["psf_l1_error"], "*", ms=11, color=line.get_color())
         ax[1].plot(
             [r["seconds"] for r in pd],
             [r["dolp_rmse_off_edges"] for r in pd],
@@ -269,7 +280,9 @@ def run(ctx):
         ax[1].plot(em["seconds"], em["dolp_rmse_off_edges"], "x", ms=9, color=line.get_color())
         ax[1].axhline(tp["dolp_rmse_off_edges"], ls=":", color=line.get_color())
     ax[0].set(
-        xlabel="time [s]", ylabel="PSF L1 error (2 = disjoint)", title=f"{n} x {n}; x: blind EM"
+        xlabel="time [s]",
+        ylabel="PSF L1 error (2 = disjoint)",
+        title=f"{n} x {n}; x: blind EM; *: started at the true phase",
     )
     ax[0].legend(fontsize=8)
     ax[1].set(
@@ -281,20 +294,9 @@ def run(ctx):
     ctx.save_figure(fig, "perf_phase_diversity")
     lines = []
     for d_r0 in strengths:
-        em = next(r for r in rows if r["d_over_r0"] == d_r0 and r["method"] == "blind EM")
-        tp = next(r for r in rows if r["d_over_r0"] == d_r0 and r["method"] == "true PSF")
-        top = next(
-            r
-            for r in rows
-            if r["d_over_r0"] == d_r0
-            and r["method"] == "phase diversity"
-            and r["iterations"] == knob[-1]
-        )
-        warm = next(
-            r
-            for r in rows
-            if r["d_over_r0"] == d_r0 and r["method"] == "phase diversity from the true phase"
-        )
+        em, tp = pick(d_r0, "blind EM"), pick(d_r0, "true PSF")
+        top = pick(d_r0, "phase diversity", knob[-1])
+        warm = pick(d_r0, "phase diversity from the true phase")
         gap = top["neg_log_likelihood"] - warm["neg_log_likelihood"]
         lines.append(
             f"D/r0 {d_r0:g} (+-{defocus[d_r0]:g} wave{'s' if defocus[d_r0] != 1 else ''}): PSF L1 "
