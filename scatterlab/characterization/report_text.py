@@ -327,9 +327,10 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
             "true PSFs in the table above). Measured on the default scene's aluminium at 50 deg, +-1 "
             "wave found the PSF at D/r0 7.9 (L1 0.18-0.19, classification 0.032 after 2000 iterations, "
             "true PSF 0.023). At 12.9 even +-2 waves stop far from it (L1 0.6-1.0), although the "
-            "likelihood does identify it there: a fit started at the true phase stays close to it at a "
-            "far better likelihood, so what stops short is the fit's search, not the data; more "
-            "iterations did not close the gap (`docs/characterization_accuracy.md`)."
+            "likelihood does identify it there: on a smaller plate a fit started at the true phase "
+            "stayed close to it at a far better likelihood, so what stops short is the fit's search, "
+            "not the data; on this scene 1000 iterations per stage instead of 300 did not close the gap "
+            "(`docs/characterization_accuracy.md`)."
         )
     elif after and not ideal.psf:
         dist = ", ".join(

@@ -309,8 +309,8 @@ def run(ctx):
                 f"with a negative log-likelihood {gap:.3g} below the cold start's: the likelihood "
                 "prefers the true PSF, so what stops the cold start is the search."
                 if gap > 1.0
-                else f"with a negative log-likelihood no lower than the cold start's ({-gap:.3g} above "
-                "it): a wrong PSF fits as well, so more iterations would not find the true one."
+                else f"with a negative log-likelihood no more than 1 below the cold start's (difference "
+                f"{gap:+.3g}): a wrong PSF fits as well, so more iterations would not find the true one."
             )
         )
     lines.append(
