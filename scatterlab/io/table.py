@@ -524,6 +524,10 @@ def wavelength_column(table: "Table", i: int, factor: float) -> np.ndarray:
     return w
 
 
+# a number written with a decimal comma (0,25 or -1,5e-3), which float() refuses
+_DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+([eE][+-]?\d+)?$")
+
+
 def _split(line: str, delimiter):
     if delimiter is None:
         return line.split()
@@ -570,14 +574,25 @@ def read_table(path) -> Table:
         if len(cells) != len(header):
             raise ValueError(
                 f"{path}, line {lineno}: {len(cells)} values for {len(header)} columns"
+                + (
+                    " (decimal commas? in a comma-separated table they split the numbers: write "
+                    "decimal points, e.g. 0.25, or separate the columns with ';')"
+                    if delimiter == "," and len(cells) > len(header)
+                    else ""
+                )
             )
         row = []
         for name, cell in zip(header, cells):
             try:
                 v = float(cell)
             except ValueError:
+                hint = (
+                    f" (a decimal comma? write decimal points: {cell.strip().replace(',', '.')})"
+                    if _DECIMAL_COMMA.match(cell.strip())
+                    else ""
+                )
                 raise ValueError(
-                    f"{path}, line {lineno}, column {name!r}: {cell!r} is not a number"
+                    f"{path}, line {lineno}, column {name!r}: {cell!r} is not a number{hint}"
                 ) from None
             if not np.isfinite(v):
                 raise ValueError(

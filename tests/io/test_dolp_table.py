@@ -98,3 +98,21 @@ def test_a_dolp_in_percent_is_refused_with_the_fix(tmp_path):
         ValueError, match=r"outside \[0, 1\] \(by more than a noise margin of 0.05\)$"
     ):
         read_dolp_table(path)
+
+
+def test_decimal_commas_are_pointed_out_with_the_fix(tmp_path):
+    # a ';'-separated table with decimal commas: the cell is named with its decimal-point spelling
+    semi = tmp_path / "semi.csv"
+    semi.write_text("theta;dolp\n30;0,30\n45;0,52\n")
+    with pytest.raises(ValueError, match=r"line 2, column 'dolp'.*decimal comma.*0\.30"):
+        read_dolp_table(semi)
+    # in a comma-separated table they split the numbers into too many cells
+    comma = tmp_path / "comma.csv"
+    comma.write_text("theta,dolp\n30,0,30\n45,0,52\n")
+    with pytest.raises(ValueError, match=r"line 2: 3 values for 2 columns \(decimal commas\?"):
+        read_dolp_table(comma)
+    # a row that is merely short gets no such guess
+    short = tmp_path / "short.csv"
+    short.write_text("theta,dolp,std\n30,0.3\n")
+    with pytest.raises(ValueError, match=r"2 values for 3 columns$"):
+        read_dolp_table(short)
