@@ -9,7 +9,7 @@
     scatterlab analyze DATASET [--out DIR] [--force] [--psf blind|diffraction] [--iterations N]
                      [--classes adaptive|priors] [--bias-samples N] [--model-error] [--frames F]
                      [--psf-refine none|layout]
-    scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--time-convention exp(-iwt)]
+    scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--sigma S] [--time-convention exp(-iwt)]
     scatterlab fit-dolp FILE.csv [--out DIR] [--sigma S] [--noise N] [--angle-unit rad]
     scatterlab fit-ellipsometry FILE.csv [--out DIR] [--sigma S] [--time-convention exp(-iwt)]
 
@@ -297,12 +297,15 @@ def _fit_mueller(args) -> int:
                 "--wavelength-um"
             )
         t0 = time.perf_counter()
+        if args.sigma is not None and not 0.01 <= args.sigma <= 1.5:
+            raise ValueError(f"--sigma must be a known rms slope in [0.01, 1.5], got {args.sigma}")
         fit = fit_pbrdf(
             data,
             shadowing=args.shadowing,
             diffuse=args.diffuse,
             posterior_steps=args.posterior_steps,
             rng=args.seed,
+            sigma=args.sigma,
         )
         report = write_fit_report(
             data,
@@ -325,9 +328,10 @@ def _fit_mueller(args) -> int:
         if fit.weighted
         else f"rms residual {np.sqrt(fit.reduced_chi2):.3g}" + ("" if fit.normalised else " of m11")
     )
+    sigma = f"{fit.sigma:.4g} +- {e[2]:.2g}" if args.sigma is None else f"{fit.sigma:.4g} (known)"
     print(
         f"n = {fit.n:.5g} +- {e[0]:.2g}, kappa = {fit.kappa:.5g} +- {e[1]:.2g}, "
-        f"sigma = {fit.sigma:.4g} +- {e[2]:.2g} ({quality})"
+        f"sigma = {sigma} ({quality})"
     )
     if not fit.success:
         print(
@@ -542,6 +546,12 @@ def _add_fit_mueller(sub):
         "--posterior-steps", type=int, default=0, help="emcee steps per walker (0: no posterior)"
     )
     fm.add_argument("--seed", type=int, default=20101210, help="seed of the posterior sampler")
+    fm.add_argument(
+        "--sigma",
+        type=float,
+        default=None,
+        help="known roughness (rms facet slope, 0.01-1.5), held fixed; default: fitted",
+    )
     fm.add_argument(
         "--column",
         action="append",

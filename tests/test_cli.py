@@ -111,6 +111,18 @@ def test_fit_mueller_fits_a_scatmech_style_file_and_writes_its_report(tmp_path, 
     assert "Time convention?" in report and "Posterior (emcee, 24 walkers x 60 steps" in report
     # said on the console too, not only in the file
     assert "time convention" in capsys.readouterr().err
+    # a known roughness is held: said on the console and in the report, with a posterior of n, kappa
+    argv = ["fit-mueller", str(path), "--out", str(out), "--force", "--sigma", "0.3"]
+    assert main(argv + ["--time-convention", "exp(-iwt)", "--posterior-steps", "60"]) == 0
+    assert "sigma = 0.3 (known)" in capsys.readouterr().out
+    report = (out / "report.md").read_text()
+    assert "| sigma (rms facet slope) | 0.3 | known, held fixed |" in report
+    assert "sigma = 0.3 known (median" in report
+    metrics = json.loads((out / "metrics.json").read_text())["fit"]
+    assert metrics["options"]["sigma_known"] == 0.3 and metrics["errors"]["sigma"] == 0
+    assert metrics["n"] == pytest.approx(1.39, abs=4 * metrics["errors"]["n"])
+    assert main(argv[:-1] + ["3"]) == 2
+    assert "--sigma must be a known rms slope in [0.01, 1.5], got 3" in capsys.readouterr().err
 
 
 def test_fit_mueller_bad_input_exit_codes(tmp_path, capsys):

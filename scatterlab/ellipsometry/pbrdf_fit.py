@@ -91,7 +91,8 @@ class PBRDFFit(IndexFitMixin):
     n, kappa, sigma : float
         Best fit (``eta = n - 1j*kappa``; ``sigma`` the per-axis rms facet slope).
     covariance : ndarray (3, 3)
-        Of (n, kappa, sigma); ``inf`` where the data do not determine them.
+        Of (n, kappa, sigma); ``inf`` where the data do not determine them; 0 in sigma's row and
+        column when sigma was known.
     predicted : ndarray (N, 4, 4)
         The model at the data's geometries [1/sr] (normalised by its F00 for normalised data).
     residuals : ndarray (N, 4, 4)
@@ -275,6 +276,7 @@ def fit_pbrdf(
     posterior_steps: int = 0,
     walkers: int = 24,
     rng=None,
+    sigma: float | None = None,
 ) -> PBRDFFit:
     """Fit n, kappa and sigma of the pBRDF to all 16 elements of a measured Mueller BRDF.
 
@@ -299,6 +301,10 @@ def fit_pbrdf(
         emcee walkers (>= 8).
     rng : anything ``numpy.random.default_rng`` accepts
         Seeds the walkers' start and emcee's moves.
+    sigma : float, optional
+        Known roughness (rms facet slope, within the bounds' sigma range), e.g. from profilometry:
+        held fixed, so only n and kappa are fitted and sampled (its error and covariance are 0).
+        Default: fitted.
 
     Returns
     -------
@@ -309,7 +315,8 @@ def fit_pbrdf(
     ValueError
         Several wavelengths and none chosen, a wavelength not in the data, empty, non-finite or
         negative ``starts``, bad
-        bounds, non-positive standard deviations of fitted elements, fewer data than parameters.
+        bounds, a known ``sigma`` outside the bounds, non-positive standard deviations of fitted
+        elements, fewer data than parameters.
     """
     data = _select(data, wavelength)
     starts = [tuple(s) for s in check_starts(starts).tolist()]
@@ -322,44 +329,78 @@ def fit_pbrdf(
         )
     if posterior_steps < 0 or int(posterior_steps) != posterior_steps:
         raise ValueError(f"posterior_steps must be a non-negative integer, got {posterior_steps}")
+    if sigma is not None:
+        sigma = float(sigma)
+        if not lo[2] <= sigma <= hi[2]:  # also refuses NaN
+            raise ValueError(
+                f"sigma (the known roughness) must be within the bounds' [{lo[2]:g}, {hi[2]:g}], "
+                f"got {sigma}"
+            )
     prob = _Problem(data, shadowing, diffuse)
-    if prob.used.sum() * len(data) <= 3:
+    if prob.used.sum() * len(data) <= (3 if sigma is None else 2):
         raise ValueError(
             "fewer data than parameters: at least one geometry with all elements is needed"
         )
-    best = _best_fit(prob, starts, sigma0, lo, hi)
-    other = _best_fit(_Problem(data, shadowing, diffuse, flip=True), starts, sigma0, lo, hi)
+    best = _best_fit(prob, starts, sigma0, lo, hi, sigma)
+    other = _best_fit(_Problem(data, shadowing, diffuse, flip=True), starts, sigma0, lo, hi, sigma)
     fit = _result(
         prob,
         best,
         data,
-        dict(shadowing=shadowing, diffuse=diffuse, bounds=[list(b) for b in bounds]),
+        dict(
+            shadowing=shadowing,
+            diffuse=diffuse,
+            bounds=[list(b) for b in bounds],
+            sigma_known=sigma,
+        ),
         (lo, hi),
         posterior_steps,
         walkers,
         rng,
+        sigma,
     )
     fit.circular_flip_ratio = float(other.cost / best.cost) if best.cost > 0 else float("inf")
     return fit
 
 
-def _best_fit(prob, starts, sigma0, lo, hi):
-    """The lowest-cost least-squares solution over the starting points."""
+def _free(sigma, P) -> np.ndarray:
+    """Parameter rows (..., 3) from the free ones (..., 2 or 3): a known ``sigma`` appended."""
+    P = np.asarray(P, float)
+    if sigma is None:
+        return P
+    return np.concatenate([P, np.full(P.shape[:-1] + (1,), sigma)], axis=-1)
+
+
+def _best_fit(prob, starts, sigma0, lo, hi, sigma=None):
+    """The lowest-cost least-squares solution over the starting points; with a known ``sigma`` over
+    (n, kappa) only (``x`` then carries the known sigma as its third value, ``jac`` two columns)."""
+    k = 3 if sigma is None else 2
+    lo, hi = lo[:k], hi[:k]
     x0s = [
-        np.clip([n0, k0, sigma0], lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo)) for n0, k0 in starts
+        np.clip([n0, k0, sigma0][:k], lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+        for n0, k0 in starts
     ]
-    return least_squares_from_starts(prob.residual, x0s, lo, hi, tol=1e-12, max_nfev=300)
+    best = least_squares_from_starts(
+        lambda q: prob.residual(_free(sigma, q)), x0s, lo, hi, tol=1e-12, max_nfev=300
+    )
+    best.x = _free(sigma, best.x)
+    return best
 
 
-def _result(prob, best, data, options, bounds, posterior_steps, walkers, rng) -> PBRDFFit:
-    dof = max(1, best.fun.size - 3)
+def _result(
+    prob, best, data, options, bounds, posterior_steps, walkers, rng, sigma=None
+) -> PBRDFFit:
+    k = best.jac.shape[1]  # free parameters: 3, or 2 with a known sigma
+    dof = max(1, best.fun.size - k)
     weighted = data.std is not None
     s2 = 1.0 if weighted else 2 * best.cost / dof
-    cov, determined = _covariance(best.jac, s2, bounds[1] - bounds[0])
+    cov, determined = _covariance(best.jac, s2, (bounds[1] - bounds[0])[:k])
+    cov = np.pad(cov, ((0, 3 - k), (0, 3 - k)))  # a known sigma has no error
     if not determined:
         warnings.warn(
-            "the data do not determine n, kappa and sigma together (rank-deficient Jacobian): the "
-            "covariance is infinite; add geometries (several incidence angles, out of plane)",
+            f"the data do not determine {'n, kappa and sigma' if k == 3 else 'n and kappa'} "
+            "together (rank-deficient Jacobian): the covariance is infinite; add geometries "
+            "(several incidence angles, out of plane)",
             RuntimeWarning,
             stacklevel=3,
         )
@@ -389,37 +430,47 @@ def _result(prob, best, data, options, bounds, posterior_steps, walkers, rng) ->
     )
     if posterior_steps:
         fit.posterior = _sample(
-            prob, best.x, cov if determined else None, s2, bounds, posterior_steps, walkers, rng
+            prob,
+            best.x,
+            cov if determined else None,
+            s2,
+            bounds,
+            posterior_steps,
+            walkers,
+            rng,
+            sigma,
         )
     return fit
 
 
-def _sample(prob, x, cov, s2, bounds, steps, walkers, rng) -> dict:
-    """emcee ensemble around the least-squares solution (flat priors inside ``bounds``)."""
+def _sample(prob, x, cov, s2, bounds, steps, walkers, rng, sigma=None) -> dict:
+    """emcee ensemble around the least-squares solution (flat priors inside ``bounds``); with a known
+    ``sigma`` over (n, kappa) only, the samples' sigma column then that value."""
     import emcee
 
     if walkers < 8:
         raise ValueError(f"walkers must be >= 8, got {walkers}")
     rng = np.random.default_rng(rng)
-    lo, hi = bounds
+    k = 3 if sigma is None else 2
+    lo, hi = bounds[0][:k], bounds[1][:k]
 
     def log_prob(P):
         inside = np.all((P >= lo) & (P <= hi), axis=1)
         out = np.full(len(P), -np.inf)
         if inside.any():
-            out[inside] = prob.log_likelihood(P[inside], s2)
+            out[inside] = prob.log_likelihood(_free(sigma, P[inside]), s2)
         return out
 
-    scale = np.sqrt(np.diag(cov)) if cov is not None else 1e-3 * (hi - lo)
-    p0 = x + 0.1 * scale * rng.standard_normal((walkers, 3))
+    scale = np.sqrt(np.diag(cov))[:k] if cov is not None else 1e-3 * (hi - lo)
+    p0 = x[:k] + 0.1 * scale * rng.standard_normal((walkers, k))
     p0 = np.clip(p0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-    sampler = emcee.EnsembleSampler(walkers, 3, log_prob, vectorize=True)
+    sampler = emcee.EnsembleSampler(walkers, k, log_prob, vectorize=True)
     sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
     from threadpoolctl import threadpool_limits
 
     with threadpool_limits(limits=1):  # small matrices: BLAS threads only contend (run_ensembles)
         sampler.run_mcmc(p0, int(steps), progress=False)
-    samples = sampler.get_chain(discard=int(steps) // 2, flat=True)
+    samples = _free(sigma, sampler.get_chain(discard=int(steps) // 2, flat=True))
     return {
         "samples": samples,
         "acceptance": float(np.mean(sampler.acceptance_fraction)),

@@ -152,6 +152,11 @@ def _markdown(data, fit, source, convention, seconds) -> str:
     return "\n".join(lines)
 
 
+def _sigma_known(fit) -> bool:
+    """Was the roughness given (``fit_pbrdf(sigma=...)``, ``--sigma``) rather than fitted?"""
+    return fit.options.get("sigma_known") is not None
+
+
 def _estimates_section(data, fit, convention, seconds) -> list[str]:
     """What was fitted, the estimates with 1-sigma errors and the goodness of fit."""
     e = fit.errors
@@ -176,7 +181,8 @@ def _estimates_section(data, fit, convention, seconds) -> list[str]:
         "|---|---|---|",
         f"| n | {fit.n:.6g} | {e[0]:.3g} |",
         f"| kappa | {fit.kappa:.6g} | {e[1]:.3g} |",
-        f"| sigma (rms facet slope) | {fit.sigma:.6g} | {e[2]:.3g} |",
+        f"| sigma (rms facet slope) | {fit.sigma:.6g} | "
+        + ("known, held fixed |" if _sigma_known(fit) else f"{e[2]:.3g} |"),
         "",
         goodness
         + f"; fit {'converged' if fit.success else 'did NOT converge'}; run time {seconds:.1f} s.",
@@ -193,8 +199,13 @@ def _posterior_and_warnings(fit) -> list[str]:
         lines += [
             f"Posterior (emcee, {post['walkers']} walkers x {post['steps']} steps, first half "
             f"discarded; acceptance {post['acceptance']:.2f}): n = {med[0]:.6g} +- {sd[0]:.3g}, "
-            f"kappa = {med[1]:.6g} +- {sd[1]:.3g}, sigma = {med[2]:.6g} +- {sd[2]:.3g} "
-            "(median +- standard deviation).",
+            f"kappa = {med[1]:.6g} +- {sd[1]:.3g}, "
+            + (
+                f"sigma = {med[2]:.6g} known"
+                if _sigma_known(fit)
+                else f"sigma = {med[2]:.6g} +- {sd[2]:.3g}"
+            )
+            + " (median +- standard deviation).",
             "",
         ]
     if not fit.determined:

@@ -88,6 +88,33 @@ def test_posterior_agrees_with_the_covariance():
     assert fit.summary()["posterior"]["steps"] == 600
 
 
+def test_a_known_roughness_is_held_and_narrows_n_and_kappa():
+    """sigma given (as from profilometry): n and kappa recovered within 4 standard errors, and their
+    errors, at the same point, no larger than with sigma fitted (the inverse of a sub-block of J^T J
+    never exceeds the sub-block of its inverse: fixing a parameter cannot widen the others); a wrong sigma
+    shows in the fit's quality; the posterior samples only n and kappa."""
+    data = noisy(np.random.default_rng(7))
+    free = fit_pbrdf(data)
+    fit = fit_pbrdf(data, sigma=SIGMA, posterior_steps=400, rng=4)
+    assert fit.sigma == SIGMA and fit.errors[2] == 0 and fit.options["sigma_known"] == SIGMA
+    got, truth = np.array([fit.n, fit.kappa]), np.array([ETA.real, -ETA.imag])
+    assert np.all(np.abs(got - truth) < 4 * fit.errors[:2]), (got, fit.errors)
+    assert fit.dof == free.dof + 1
+    # at the free fit's own sigma the optimum, and so J, is the same point: only the inversion differs
+    held = fit_pbrdf(data, sigma=free.sigma)
+    assert [held.n, held.kappa] == pytest.approx([free.n, free.kappa], rel=1e-6)
+    assert np.all(held.errors[:2] <= free.errors[:2] * (1 + 1e-6))
+    s = fit.posterior["samples"]
+    assert s.shape[1] == 3 and np.all(s[:, 2] == SIGMA)
+    np.testing.assert_allclose(s[:, :2].std(0), fit.errors[:2], rtol=0.3)
+    # the truth's 0.3 held at 0.2: 1 % noise on 480 elements cannot hide it
+    wrong = fit_pbrdf(data, sigma=0.2)
+    assert wrong.reduced_chi2 > 5 * free.reduced_chi2
+    for bad in (0.0, 2.0, float("nan")):
+        with pytest.raises(ValueError, match=r"sigma \(the known roughness\) must be within"):
+            fit_pbrdf(data, sigma=bad)
+
+
 def test_bad_arguments(tmp_path):
     data = noisy(np.random.default_rng(1))
     with pytest.raises(ValueError, match="starts"):
