@@ -234,18 +234,26 @@ DOLP_COLUMNS = ("theta", "theta_i", "theta_r", "phi", "dolp", "std")
 ELLIPSOMETRY_COLUMNS = ("theta", "wavelength")
 
 
-def _columns(pairs, keys) -> dict | None:
-    """``--column KEY=NAME`` options as a reader's ``columns`` mapping (ValueError naming the option)."""
+def _columns(pairs, keys, elements: bool = False) -> dict | None:
+    """``--column KEY=NAME`` options as a reader's ``columns`` mapping (ValueError naming the option);
+    with ``elements`` KEY may also be a Mueller element name (m12, f_r12, std_m12, m12/m11)."""
+    from scatterlab.io.table import normalise_name, parse_element
+
     if not pairs:
         return None
     out = {}
     for pair in pairs:
         key, eq, name = pair.partition("=")
         key, name = key.strip(), name.strip()
-        if not eq or not name or key not in keys:
+        try:
+            element = elements and parse_element(normalise_name(key)[0]) is not None
+        except ValueError:  # m12/m22: normalised by another element than the first
+            element = False
+        if not eq or not name or (key not in keys and not element):
             raise ValueError(
-                f"--column must be KEY=NAME with KEY one of {', '.join(keys)} and NAME a column of "
-                f"the file, got {pair!r}"
+                f"--column must be KEY=NAME with KEY one of {', '.join(keys)}"
+                + (" or a Mueller element (m12, std_m12, ...)" if elements else "")
+                + f" and NAME a column of the file, got {pair!r}"
             )
         out[key] = name
     return out
@@ -276,7 +284,7 @@ def _fit_mueller(args) -> int:
         data = _read_noting(
             read_mueller_brdf,
             args.file,
-            _columns(args.column, MUELLER_COLUMNS),
+            _columns(args.column, MUELLER_COLUMNS, elements=True),
             angle_unit=args.angle_unit,
             wavelength_unit=args.wavelength_unit,
             time_convention=args.time_convention,
@@ -557,7 +565,8 @@ def _add_fit_mueller(sub):
         action="append",
         default=[],
         metavar="KEY=NAME",
-        help="the file's column NAME holds quantity KEY (wavelength, theta_i, phi_i, theta_r, phi_r, phi); repeatable",
+        help="the file's column NAME holds quantity KEY (wavelength, theta_i, phi_i, theta_r, phi_r, phi, "
+        "or an element: f_r12, m12, std_m12, m12/m11); repeatable",
     )
     fm.add_argument("--force", action="store_true", help="replace an existing report")
 
@@ -585,7 +594,8 @@ def _add_fit_ellipsometry(sub):
         action="append",
         default=[],
         metavar="KEY=NAME",
-        help="the file's column NAME holds quantity KEY (theta, wavelength); repeatable",
+        help="the file's column NAME holds quantity KEY (theta, wavelength, or an element: m12, "
+        "std_m12); repeatable",
     )
 
 
@@ -602,7 +612,7 @@ def _fit_ellipsometry(args) -> int:
         data = _read_noting(
             read_ellipsometry,
             args.file,
-            _columns(args.column, ELLIPSOMETRY_COLUMNS),
+            _columns(args.column, ELLIPSOMETRY_COLUMNS, elements=True),
             angle_unit=args.angle_unit,
             wavelength_unit=args.wavelength_unit,
             time_convention=args.time_convention,

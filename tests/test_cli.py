@@ -360,6 +360,16 @@ def test_fit_ellipsometry_column_and_bad_file(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--column theta=NAME" in err and "Traceback" not in err
     assert main([*argv, "--column", "theta=incidence_angle"]) == 0
+    # an element under the instrument's own name
+    (tmp_path / "m.csv").write_text(text.replace(",m34", ",circ"))
+    argv = ["fit-ellipsometry", str(tmp_path / "m.csv"), "--out", str(tmp_path / "m")]
+    argv += ["--column", "theta=incidence_angle"]
+    assert main(argv) == 2
+    assert "--column m34=NAME" in capsys.readouterr().err
+    assert main([*argv, "--column", "m34=circ"]) == 0
+    assert "kappa = 10.4" in capsys.readouterr().out
+    assert main([*argv, "--column", "m34=circ", "--column", "m5=x", "--force"]) == 2
+    assert "or a Mueller element" in capsys.readouterr().err
     assert main(["fit-ellipsometry", str(tmp_path / "none.csv")]) == 2
     assert "no such file" in capsys.readouterr().err
     # radians read as degrees: said on screen and kept in the report

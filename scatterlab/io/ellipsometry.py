@@ -111,7 +111,8 @@ def read_ellipsometry(
     ----------
     path : str or Path
     columns : dict, optional
-        ``{"theta": NAME, "wavelength": NAME}`` for unrecognised angle or wavelength column names.
+        ``{"theta": NAME, "wavelength": NAME}`` for unrecognised angle or wavelength column names,
+        and element names (``"m12"``, ``"std_m12"``, 1-based) for unrecognised element columns.
     angle_unit : {"deg", "rad"}
     wavelength_unit : {"um", "nm", "mm", "m"}
     time_convention : {"exp(+jwt)", "exp(-iwt)"}
@@ -147,7 +148,7 @@ def read_ellipsometry(
         )
     warn_if_radians(table.path, (theta,), opt.angle, stacklevel=2)
     wavelength = _wavelength(table, columns, opt.length)
-    E, S = _elements(table, theta.size, opt.tolerance)
+    E, S = _elements(table, theta.size, opt.tolerance, columns)
     notes = []
     if opt.flip:
         E[:, 3] = -E[:, 3]
@@ -155,13 +156,15 @@ def read_ellipsometry(
     return EllipsometryData(theta, E, S, wavelength, str(path), notes)
 
 
-def _elements(table, n, tolerance):
+def _elements(table, n, tolerance, columns=None):
     """In-plane elements (n, 4), normalised, and their standard deviations (or None)."""
-    values, stds = element_columns(table, default_base=1)
+    values, stds = element_columns(table, default_base=1, columns=columns)
     missing = [element_name(j, k) for j, k in IN_PLANE_ELEMENTS if (j, k) not in values]
     if missing:
         raise ValueError(
-            f"{table.path}: missing element columns {missing} (in-plane data: m12, m22, m33, m34)"
+            f"{table.path}: missing element columns {missing} (in-plane data: m12, m22, m33, m34; "
+            f"map yours with columns={{{missing[0]!r}: NAME}}, --column {missing[0]}=NAME on the "
+            "command line)"
         )
     first = values.get((0, 0))
     scale = table.values[:, first[0]] if first is not None and not first[1] else np.ones(n)

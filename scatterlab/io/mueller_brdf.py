@@ -201,7 +201,10 @@ def _mueller(table, values, stds, where):
         if (j, k) not in values and not ((j, k) == (0, 0) and not M00_abs)
     ]
     if missing:
-        raise ValueError(f"{where}: missing Mueller element columns {missing}")
+        raise ValueError(
+            f"{where}: missing Mueller element columns {missing} (map yours with "
+            f"columns={{{missing[0]!r}: NAME}}, --column {missing[0]}=NAME on the command line)"
+        )
     M, S = np.zeros((n, 4, 4)), np.zeros((n, 4, 4))
     scale = table.values[:, values[(0, 0)][0]] if M00_abs else np.ones(n)
     for (j, k), (i, normalised) in values.items():
@@ -317,7 +320,8 @@ def read_mueller_brdf(
     columns : dict, optional
         Maps quantities to the file's column names where they are not recognised: keys
         ``"wavelength"``, ``"theta_i"``, ``"phi_i"``, ``"theta_r"``, ``"phi_r"``, ``"phi"``
-        (relative azimuth).
+        (relative azimuth), and element names (``"f_r12"``, ``"m12"``, ``"std_m12"``,
+        ``"m12/m11"``, in the file's index base).
     angle_unit : {"deg", "rad"}
         Unit of the angle columns (default degrees).
     wavelength_unit : {"um", "nm", "mm", "m"}
@@ -351,7 +355,7 @@ def read_mueller_brdf(
     wi = table.find(ALIASES["wavelength"], "wavelength", columns=columns)
     wavelength = wavelength_column(table, wi, opt.length)
     theta_i, phi_i, theta_r, phi_r, notes = _angles(table, columns, opt)
-    values, stds = element_columns(table)
+    values, stds = element_columns(table, columns=columns)
     M, S, normalised = _mueller(table, values, stds, str(path))
     _check_elements(table, M, opt.tolerance, str(path))
     theta_i, theta_r, phi, M = _project_geometry(theta_i, phi_i, theta_r, phi_r, M, notes)

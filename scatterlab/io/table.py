@@ -334,7 +334,7 @@ def element_name(
     return f"std_{name}" if std else name
 
 
-def element_columns(table, default_base: int | None = None):
+def element_columns(table, default_base: int | None = None, columns: dict | None = None):
     """Mueller element columns of ``table`` (names: module docstring).
 
     Parameters
@@ -343,6 +343,10 @@ def element_columns(table, default_base: int | None = None):
         A table from :func:`read_table`.
     default_base : {0, 1, None}
         Index base used when the digits do not tell (no 0 and no 4 index); None refuses.
+    columns : dict, optional
+        The readers' ``columns``: its keys that are element names (``"m12"``, ``"std_m12"``,
+        ``"m12/m11"``, in the file's index base) map an element to a column of any name; that column
+        then stands for the element, in place of one the file names so.
 
     Returns
     -------
@@ -351,15 +355,28 @@ def element_columns(table, default_base: int | None = None):
         standard deviations.
     """
     prefix_err = table.path
-    parsed = {}
+    named = {}  # column index -> the element a ``columns`` entry says it holds
+    for key, name in (columns or {}).items():
+        p = parse_element(normalise_name(str(key))[0])
+        if p is None:
+            continue
+        hits = [i for i, k in enumerate(table.keys) if k == normalise_name(str(name))[0]]
+        if not hits:
+            raise ValueError(
+                f"{prefix_err}: columns[{key!r}] = {name!r} is not a column "
+                f"(columns: {', '.join(table.names)})"
+            )
+        named[hits[0]] = p
+    parsed = dict(named)
     for i, key in enumerate(table.keys):
         p = parse_element(key)
-        if p is not None:
+        if p is not None and i not in named and p not in named.values():
             parsed[i] = p
     if not parsed:
         raise ValueError(
             f"{prefix_err}: no Mueller element columns (f_r11 ... f_r44, m11 ... m44 or "
-            f"m12/m11 ...; columns: {', '.join(table.names)})"
+            f"m12/m11 ...; columns: {', '.join(table.names)}; map yours with "
+            "columns={'m12': NAME}, --column m12=NAME on the command line)"
         )
     digits = {
         d

@@ -101,3 +101,40 @@ def test_columns_mapping(tmp_path):
     assert read_ellipsometry(path, {"theta": "angle_of_something"}).theta[0] == pytest.approx(
         np.radians(10)
     )
+
+
+def test_element_columns_of_any_name_are_mapped(tmp_path):
+    # an instrument's own names for the in-plane elements and one standard deviation
+    path = tmp_path / "own.csv"
+    path.write_text(
+        "aoi,N,C,S,Psi34,u_m12,std_m22,std_m33,std_m34\n40,-0.2,0.9,0.8,0.3,0.01,0.01,0.01,0.01\n"
+    )
+    with pytest.raises(ValueError, match=r"missing element columns.*--column m12=NAME"):
+        read_ellipsometry(path)
+    names = {"m12": "N", "m22": "C", "m33": "S", "m34": "Psi34", "std_m12": "u_m12"}
+    d = read_ellipsometry(path, names)
+    np.testing.assert_allclose(d.elements, [[-0.2, 0.9, 0.8, 0.3]])
+    np.testing.assert_allclose(d.std, 0.01)
+    # a mapped column stands for the element in place of one the file names so
+    path.write_text("aoi,m12,m22,m33,m34,m34_corrected\n40,-0.2,0.9,0.8,0.3,0.25\n")
+    assert read_ellipsometry(path, {"m34": "m34_corrected"}).elements[0, 3] == 0.25
+    with pytest.raises(ValueError, match=r"columns\['m34'\] = 'nope' is not a column"):
+        read_ellipsometry(path, {"m34": "nope"})
+
+
+def test_mueller_brdf_element_columns_of_any_name_are_mapped(tmp_path):
+    from scatterlab.io import read_mueller_brdf
+
+    lines = [
+        "lambda,thetai,phii,thetar,phir,"
+        + ",".join(f"f_r{j}{k}" for j in range(1, 5) for k in range(1, 5))
+    ]
+    lines.append("1.55,30,0,30,180," + ",".join("1" if jk == 0 else "0.1" for jk in range(16)))
+    path = tmp_path / "b.csv"
+    path.write_text("\n".join(lines).replace("f_r12,", "BRDF_ps,") + "\n")
+    with pytest.raises(
+        ValueError, match=r"missing Mueller element columns \['m12'\].*--column m12=NAME"
+    ):
+        read_mueller_brdf(path)
+    data = read_mueller_brdf(path, {"f_r12": "BRDF_ps"})
+    assert data.mueller[0, 0, 1] == pytest.approx(0.1) and data.mueller[0, 0, 0] == 1
