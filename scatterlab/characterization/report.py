@@ -51,7 +51,7 @@ class RunFolder:
         self.report = self.path / "report.md"
         if self.report.exists() and not overwrite:
             raise FileExistsError(
-                f"{self.report} exists (a finished run); pass overwrite=True (CLI: --force)"
+                f"{self.report} exists (a finished run); pass overwrite=True (--force on the command line)"
             )
         if self.report.exists():
             self.report.unlink()  # from here on the folder holds an unfinished run

@@ -264,7 +264,7 @@ def report_folder(out, overwrite: bool) -> tuple[Path, Path]:
     out = Path(out)
     report = out / "report.md"
     if report.exists() and not overwrite:
-        raise FileExistsError(f"{report} exists; pass overwrite=True (CLI: --force)")
+        raise FileExistsError(f"{report} exists; pass overwrite=True (--force on the command line)")
     out.mkdir(parents=True, exist_ok=True)
     return out, report
 

@@ -19,6 +19,7 @@ project's).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -149,11 +150,35 @@ def read_ellipsometry(
     warn_if_radians(table.path, (theta,), opt.angle, stacklevel=2)
     wavelength = _wavelength(table, columns, opt.length)
     E, S = _elements(table, theta.size, opt.tolerance, columns)
+    _warn_if_m12_negative(table.path, E[:, 0], None if S is None else S[:, 0])
     notes = []
     if opt.flip:
         E[:, 3] = -E[:, 3]
         notes.append(f"time convention {time_convention}: M23 sign-flipped to exp(+jwt)")
     return EllipsometryData(theta, E, S, wavelength, str(path), notes)
+
+
+def _warn_if_m12_negative(path, m12, std) -> None:
+    """Warn when more rows have m12 clearly below 0 than above (at least two): the other sign
+    convention of S1.
+
+    Specular reflection from an isotropic passive surface has :math:`|r_p| \\le |r_s|` (Abeles:
+    :math:`r_p = r_s (r_s - \\cos 2\\theta) / (1 - r_s \\cos 2\\theta)`, a factor of modulus <= 1), so
+    with S1 = I_s - I_p the normalised m12 = (R_s - R_p) / (R_s + R_p), diluted by any unpolarized
+    diffuse light, is >= 0 at every angle. "Clearly" is beyond 3 standard deviations and 0.01 (a
+    metal's m12 stays near 0 up to 30-40 deg, so a majority of rows need not be clear either way).
+    """
+    margin = np.maximum(3 * std, 0.01) if std is not None else 0.01
+    negative, positive = int(np.sum(m12 < -margin)), int(np.sum(m12 > margin))
+    if negative >= 2 and negative > positive:
+        warnings.warn(
+            f"{path}: m12 < 0 at {negative} of {m12.size} angles, but specular reflection has "
+            "R_s >= R_p, so m12 = (R_s - R_p) / (R_s + R_p) >= 0 with S1 = I_s - I_p (this "
+            "package's convention): the file probably takes S1 = I_p - I_s; negate its m12 column "
+            "(the fit of these data is not meaningful)",
+            UserWarning,
+            stacklevel=3,
+        )
 
 
 def _elements(table, n, tolerance, columns=None):

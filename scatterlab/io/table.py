@@ -1,9 +1,11 @@
 """Delimited text tables (CSV) shared by the readers: parsing, columns, units, element names.
 
 A table is a header line of column names followed by one row of numbers per line. Lines starting
-with ``#`` are comments (writers put the units and conventions there); blank lines are skipped. The
-delimiter is a comma, a tab, a semicolon or white space, whichever the header uses. Every error
-names the file, and the row (line number in the file) and column where there is one.
+with ``#`` are comments (writers put the units and conventions there); blank lines, and rows of empty
+cells that spreadsheets leave below the data, are skipped. The delimiter is a comma, a tab, a
+semicolon or white space, whichever the header uses; beside any but a comma a number may have a
+decimal comma (``0,25``, the European spreadsheet export). Every error names the file, and the row
+(line number in the file) and column where there is one.
 
 Column names are matched case-insensitively, ignoring spaces and underscores (``theta_i`` = ``Theta
 I`` = ``thetai``). A unit in brackets or after the last underscore (``lambda [nm]``,
@@ -464,7 +466,8 @@ class Table:
         if unit is not None and unit != expected:
             raise ValueError(
                 f"{self.path}: column {self.names[i]!r} is in {unit} but {argument}={expected!r}; "
-                f"pass {argument}={unit!r}"
+                f"pass {argument}={unit!r} (--{argument.replace('_', '-')} {unit} on the command "
+                "line)"
             )
 
 
@@ -588,6 +591,8 @@ def read_table(path) -> Table:
             header = [h.strip() for h in _split(line, delimiter)]
             continue
         cells = _split(line, delimiter)
+        if delimiter is not None and not any(c.strip() for c in cells):
+            continue  # a row of empty cells (",,,," that spreadsheets leave below the data)
         if len(cells) != len(header):
             raise ValueError(
                 f"{path}, line {lineno}: {len(cells)} values for {len(header)} columns"
@@ -600,14 +605,12 @@ def read_table(path) -> Table:
             )
         row = []
         for name, cell in zip(header, cells):
+            if delimiter != "," and _DECIMAL_COMMA.match(cell.strip()):
+                cell = cell.strip().replace(",", ".")  # 0,25 beside ';' or tabs: a decimal comma
             try:
                 v = float(cell)
             except ValueError:
-                hint = (
-                    f" (a decimal comma? write decimal points: {cell.strip().replace(',', '.')})"
-                    if _DECIMAL_COMMA.match(cell.strip())
-                    else ""
-                )
+                hint = " (an empty cell: fill it or delete the row)" if not cell.strip() else ""
                 raise ValueError(
                     f"{path}, line {lineno}, column {name!r}: {cell!r} is not a number{hint}"
                 ) from None

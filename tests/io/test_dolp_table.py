@@ -100,13 +100,14 @@ def test_a_dolp_in_percent_is_refused_with_the_fix(tmp_path):
         read_dolp_table(path)
 
 
-def test_decimal_commas_are_pointed_out_with_the_fix(tmp_path):
-    # a ';'-separated table with decimal commas: the cell is named with its decimal-point spelling
+def test_decimal_commas_and_spreadsheet_leftovers(tmp_path):
+    # beside ';' (the European spreadsheet export) a decimal comma is read as the decimal mark
     semi = tmp_path / "semi.csv"
-    semi.write_text("theta;dolp\n30;0,30\n45;0,52\n")
-    with pytest.raises(ValueError, match=r"line 2, column 'dolp'.*decimal comma.*0\.30"):
-        read_dolp_table(semi)
-    # in a comma-separated table they split the numbers into too many cells
+    semi.write_text("theta;dolp;std\n30;0,30;0,01\n45;0,52;1,5e-2\n")
+    d = read_dolp_table(semi)
+    np.testing.assert_allclose(d.dolp, [0.30, 0.52])
+    np.testing.assert_allclose(d.std, [0.01, 0.015])
+    # in a comma-separated table they split the numbers into too many cells: said, with the fix
     comma = tmp_path / "comma.csv"
     comma.write_text("theta,dolp\n30,0,30\n45,0,52\n")
     with pytest.raises(ValueError, match=r"line 2: 3 values for 2 columns \(decimal commas\?"):
@@ -116,3 +117,12 @@ def test_decimal_commas_are_pointed_out_with_the_fix(tmp_path):
     short.write_text("theta,dolp,std\n30,0.3\n")
     with pytest.raises(ValueError, match=r"2 values for 3 columns$"):
         read_dolp_table(short)
+    # rows of empty cells below the data are skipped; an empty cell inside a row is named
+    excel = tmp_path / "excel.csv"
+    excel.write_text("theta,dolp\n30,0.3\n45,0.5\n,\n,\n")
+    np.testing.assert_allclose(read_dolp_table(excel).dolp, [0.3, 0.5])
+    excel.write_text("theta,dolp\n30,0.3\n45,\n")
+    with pytest.raises(
+        ValueError, match=r"line 3, column 'dolp': '' is not a number \(an empty cell"
+    ):
+        read_dolp_table(excel)

@@ -107,16 +107,16 @@ def test_element_columns_of_any_name_are_mapped(tmp_path):
     # an instrument's own names for the in-plane elements and one standard deviation
     path = tmp_path / "own.csv"
     path.write_text(
-        "aoi,N,C,S,Psi34,u_m12,std_m22,std_m33,std_m34\n40,-0.2,0.9,0.8,0.3,0.01,0.01,0.01,0.01\n"
+        "aoi,N,C,S,Psi34,u_m12,std_m22,std_m33,std_m34\n40,0.2,0.9,0.8,0.3,0.01,0.01,0.01,0.01\n"
     )
     with pytest.raises(ValueError, match=r"missing element columns.*--column m12=NAME"):
         read_ellipsometry(path)
     names = {"m12": "N", "m22": "C", "m33": "S", "m34": "Psi34", "std_m12": "u_m12"}
     d = read_ellipsometry(path, names)
-    np.testing.assert_allclose(d.elements, [[-0.2, 0.9, 0.8, 0.3]])
+    np.testing.assert_allclose(d.elements, [[0.2, 0.9, 0.8, 0.3]])
     np.testing.assert_allclose(d.std, 0.01)
     # a mapped column stands for the element in place of one the file names so
-    path.write_text("aoi,m12,m22,m33,m34,m34_corrected\n40,-0.2,0.9,0.8,0.3,0.25\n")
+    path.write_text("aoi,m12,m22,m33,m34,m34_corrected\n40,0.2,0.9,0.8,0.3,0.25\n")
     assert read_ellipsometry(path, {"m34": "m34_corrected"}).elements[0, 3] == 0.25
     with pytest.raises(ValueError, match=r"columns\['m34'\] = 'nope' is not a column"):
         read_ellipsometry(path, {"m34": "nope"})
@@ -138,3 +138,40 @@ def test_mueller_brdf_element_columns_of_any_name_are_mapped(tmp_path):
         read_mueller_brdf(path)
     data = read_mueller_brdf(path, {"f_r12": "BRDF_ps"})
     assert data.mueller[0, 0, 1] == pytest.approx(0.1) and data.mueller[0, 0, 0] == 1
+
+
+def test_m12_is_never_negative_in_the_specular_geometry():
+    """The premise of the reader's sign check: R_s >= R_p (Abeles' relation) makes the pBRDF's
+    in-plane m12 >= 0 for any passive index, roughness and angle, n below 1 and kappa up to 1e3
+    included (and the Fresnel coefficients themselves obey |r_p| <= |r_s|)."""
+    from scatterlab.ellipsometry import model_elements
+
+    theta = np.radians([0.5, 10, 30, 50, 70, 85, 89.99])
+    c = np.cos(theta)
+    for n, kappa in ((1.39, 0.34), (0.2, 3.0), (0.05, 1e3), (3.6, 5.88), (1.5, 0.0), (0.9, 0.0)):
+        e2 = (n - 1j * kappa) ** 2  # textbook Fresnel coefficients, principal root (passive)
+        root = np.sqrt(e2 - np.sin(theta) ** 2)
+        rs, rp = (c - root) / (c + root), (e2 * c - root) / (e2 * c + root)
+        assert np.all(np.abs(rp) <= np.abs(rs) * (1 + 1e-12))
+        for sigma in (1e-3, 0.3, 1.5):
+            m12 = model_elements(theta, n, kappa, sigma)[:, 0]
+            assert np.all(m12 >= -1e-12), (n, kappa, sigma, m12)
+
+
+def test_a_negated_m12_column_is_pointed_out(tmp_path):
+    import warnings
+
+    data = simulated(rng=3, noise=0.002)
+    path = write_ellipsometry(tmp_path / "e.csv", data)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_ellipsometry(path)  # as written: no warning
+    flipped = EllipsometryData(data.theta, data.elements * [-1, 1, 1, 1], data.std, 1.064e-6)
+    path = write_ellipsometry(tmp_path / "f.csv", flipped)
+    with pytest.warns(UserWarning, match=r"m12 < 0 at \d+ of 8 angles.*negate its m12 column"):
+        read_ellipsometry(path)
+    # noise-level negatives near normal incidence are not a convention
+    small = EllipsometryData(data.theta, data.elements * [0, 1, 1, 1] - [0.003, 0, 0, 0], None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_ellipsometry(write_ellipsometry(tmp_path / "s.csv", small))
