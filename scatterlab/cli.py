@@ -442,9 +442,23 @@ def _fit_dolp(args) -> int:
         )
     )
     if not post.converged:  # the sampler has warned why; say how in the command line's words
+        reason = post.convergence_reason
+        rows, free = data.dolp.size, len(names) + (noise is None and cov is None)
+        advice = []
+        if "shorter than" in reason or "R-hat" in reason:
+            advice.append(
+                "a longer chain with --posterior-steps N (this run: "
+                f"{args.posterior_steps or 'until converged, up to the sampler limit'})"
+            )
+        if "acceptance" in reason or rows <= free + 1:
+            advice.append(
+                f"{rows} rows for {free} free parameters"
+                + (" (the DOLP noise is one)" if noise is None and cov is None else "")
+                + ": the data barely constrain them; add geometries, fix the roughness with "
+                "--sigma, or give the DOLP error with --noise or a std column"
+            )
         print(
-            "scatterlab: not converged: a longer chain with --posterior-steps N "
-            f"(this run: {args.posterior_steps or 'until converged, up to the sampler limit'})",
+            "scatterlab: not converged (the warning above says why): " + "; or ".join(advice),
             file=sys.stderr,
         )
     print(f"report: {report}")

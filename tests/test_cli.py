@@ -349,6 +349,19 @@ def test_fit_commands_name_the_command_for_another_commands_table(
     assert not (tmp_path / "o").exists()
 
 
+def test_fit_dolp_with_as_many_parameters_as_rows_says_so(tmp_path, capsys):
+    """Four rows for n, kappa, sigma and an inferred noise: the advice names that, not only a longer
+    chain."""
+    path = tmp_path / "four.csv"
+    path.write_text("theta,dolp\n30,0.30\n45,0.55\n60,0.80\n70,0.7\n")
+    argv = ["fit-dolp", str(path), "--out", str(tmp_path / "o"), "--posterior-steps", "300"]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "not converged (the warning above says why)" in err
+    assert "4 rows for 4 free parameters (the DOLP noise is one)" in err
+    assert "--posterior-steps N (this run: 300)" in err
+
+
 def test_fit_ellipsometry_column_and_bad_file(tmp_path, capsys):
     from pathlib import Path
 

@@ -136,17 +136,25 @@ def posterior_report(
 
 
 def _corner_figure(post, labels, truth):
+    import logging
+
     import corner
 
     P = len(labels)
-    return corner.corner(
-        post.samples[:, :P],
-        labels=labels,
-        quantiles=[0.16, 0.5, 0.84],
-        show_titles=True,
-        truths=None if truth is None else list(truth)[:P],
-        title_fmt=".3g",
-    )
+    # corner logs "Too few points to create valid contours" on the root logger for a narrow
+    # posterior; the panel then shows the samples without contours, which is all that needs saying
+    logging.disable(logging.WARNING)
+    try:
+        return corner.corner(
+            post.samples[:, :P],
+            labels=labels,
+            quantiles=[0.16, 0.5, 0.84],
+            show_titles=True,
+            truths=None if truth is None else list(truth)[:P],
+            title_fmt=".3g",
+        )
+    finally:
+        logging.disable(logging.NOTSET)
 
 
 def _trace_figure(post, labels):

@@ -125,3 +125,23 @@ def test_messages_do_not_repeat_warnings_of_discarded_least_squares_starts():
     assert ls == []
     lo, hi = post.interval(0.68)[..., 1]  # kappa: finite and about the noise's width
     assert np.isfinite(lo) and np.isfinite(hi) and 0 < hi - lo < 0.2
+
+
+def test_a_corner_plot_of_a_collapsed_posterior_logs_nothing(caplog):
+    """corner logs "Too few points to create valid contours" on the root logger (which prints it on
+    the console) when nearly all samples fall in one bin; the report's figure stays quiet."""
+    from types import SimpleNamespace
+
+    import matplotlib.pyplot as plt
+
+    from scatterlab.inversion.report import _corner_figure
+
+    rng = np.random.default_rng(0)
+    samples = np.r_[rng.normal(0, 1e-9, (999, 2)), [[1.0, 1.0]]]
+    with caplog.at_level("WARNING"):
+        fig = _corner_figure(SimpleNamespace(samples=samples), ["n", "kappa"], None)
+    plt.close(fig)
+    assert not caplog.records
+    import logging
+
+    assert logging.root.manager.disable == logging.NOTSET  # logging is on again afterwards
