@@ -119,7 +119,7 @@ def test_fit_mueller_fits_a_scatmech_style_file_and_writes_its_report(tmp_path, 
     assert "| sigma (rms facet slope) | 0.3 | known, held fixed |" in report
     assert "sigma = 0.3 known (median" in report
     metrics = json.loads((out / "metrics.json").read_text())["fit"]
-    assert metrics["options"]["sigma_known"] == 0.3 and metrics["errors"]["sigma"] == 0
+    assert metrics["options"]["sigma_known"] == 0.3 and metrics["errors"]["sigma"] is None
     assert metrics["n"] == pytest.approx(1.39, abs=4 * metrics["errors"]["n"])
     assert main(argv[:-1] + ["3"]) == 2
     assert "--sigma must be a known rms slope in [0.01, 1.5], got 3" in capsys.readouterr().err

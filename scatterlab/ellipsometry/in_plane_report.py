@@ -142,7 +142,7 @@ def write_in_plane_report(
     plot_in_plane(data, fit, out / "elements_vs_angle.png", shadowing=shadowing, diffuse=diffuse)
     stat, dof, sentence = goodness(data, fit)
     e = fit.errors
-    sigma_err = f"{e[2]:.3g}" if e[2] > 0 else "held (given)"
+    sigma_err = f"{e[2]:.3g}" if e[2] > 0 else "known, held fixed"
     write_json(
         out / "metrics.json",
         {

@@ -149,7 +149,13 @@ class PBRDFFit(IndexFitMixin):
             "n": self.n,
             "kappa": self.kappa,
             "sigma": self.sigma,
-            "errors": dict(zip(("n", "kappa", "sigma"), self.errors.tolist())),
+            # a known sigma has no error: null, not 0
+            "errors": dict(
+                zip(
+                    ("n", "kappa", "sigma"),
+                    self.errors.tolist()[: 2 if self.options.get("sigma_known") else 3] + [None],
+                )
+            ),
             "covariance": self.covariance.tolist(),
             "cost": self.cost,
             "reduced_chi2": self.reduced_chi2,

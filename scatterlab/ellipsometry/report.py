@@ -85,7 +85,7 @@ def plot_elements(data, fit, path):
             ax.tick_params(labelsize=7)
     fig.suptitle(
         f"measured vs fitted pBRDF: n = {fit.n:.4g}, kappa = {fit.kappa:.4g}, sigma = "
-        f"{fit.sigma:.4g}"
+        f"{fit.sigma:.4g}{' (known)' if _sigma_known(fit) else ''}"
     )
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -212,6 +212,8 @@ def _elements(table, n, tolerance, columns=None):
         if lacking:
             raise ValueError(
                 f"{table.path}: standard deviations given for some elements but not for {lacking}"
+                f" (a column of another name: map it with columns={{'std_{lacking[0]}': NAME}}, "
+                f"--column std_{lacking[0]}=NAME on the command line)"
             )
         S = stack(stds)
         if np.any(S < 0):

@@ -220,6 +220,8 @@ def _mueller(table, values, stds, where):
         if lacking:
             raise ValueError(
                 f"{where}: standard deviations given for some elements but not for {lacking}"
+                f" (a column of another name: map it with columns={{'std_{lacking[0]}': NAME}}, "
+                f"--column std_{lacking[0]}=NAME on the command line)"
             )
         for (j, k), (i, normalised) in stds.items():
             s = table.values[:, i]

@@ -120,6 +120,13 @@ def test_element_columns_of_any_name_are_mapped(tmp_path):
     assert read_ellipsometry(path, {"m34": "m34_corrected"}).elements[0, 3] == 0.25
     with pytest.raises(ValueError, match=r"columns\['m34'\] = 'nope' is not a column"):
         read_ellipsometry(path, {"m34": "nope"})
+    # its standard deviation under the same name is not guessed; the error says how to map it
+    path.write_text(
+        "aoi,m12,m22,m33,circ,std_m12,std_m22,std_m33,std_circ\n40,0.2,0.9,0.8,0.3,.01,.01,.01,.02\n"
+    )
+    with pytest.raises(ValueError, match=r"not for \['m34'\].*--column std_m34=NAME"):
+        read_ellipsometry(path, {"m34": "circ"})
+    assert read_ellipsometry(path, {"m34": "circ", "std_m34": "std_circ"}).std[0, 3] == 0.02
 
 
 def test_mueller_brdf_element_columns_of_any_name_are_mapped(tmp_path):
