@@ -341,6 +341,13 @@ def _fit_mueller(args) -> int:
         f"n = {fit.n:.5g} +- {e[0]:.2g}, kappa = {fit.kappa:.5g} +- {e[1]:.2g}, "
         f"sigma = {sigma} ({quality})"
     )
+    if fit.posterior is not None:
+        med, sd = np.median(fit.posterior["samples"], 0), fit.posterior["samples"].std(0)
+        print(
+            f"posterior ({fit.posterior['walkers']} walkers x {fit.posterior['steps']} steps): "
+            f"n = {med[0]:.5g} +- {sd[0]:.2g}, kappa = {med[1]:.5g} +- {sd[1]:.2g}"
+            + ("" if args.sigma is not None else f", sigma = {med[2]:.4g} +- {sd[2]:.2g}")
+        )
     if not fit.success:
         print(
             "scatterlab: warning: the fit did not converge: these numbers are not an estimate (report.md says "

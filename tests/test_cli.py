@@ -114,7 +114,9 @@ def test_fit_mueller_fits_a_scatmech_style_file_and_writes_its_report(tmp_path, 
     # a known roughness is held: said on the console and in the report, with a posterior of n, kappa
     argv = ["fit-mueller", str(path), "--out", str(out), "--force", "--sigma", "0.3"]
     assert main(argv + ["--time-convention", "exp(-iwt)", "--posterior-steps", "60"]) == 0
-    assert "sigma = 0.3 (known)" in capsys.readouterr().out
+    out_text = capsys.readouterr().out
+    assert "sigma = 0.3 (known)" in out_text
+    assert "posterior (24 walkers x 60 steps): n = 1.3" in out_text
     report = (out / "report.md").read_text()
     assert "| sigma (rms facet slope) | 0.3 | known, held fixed |" in report
     assert "sigma = 0.3 known (median" in report
