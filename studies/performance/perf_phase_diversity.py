@@ -21,7 +21,8 @@ light from outside enters and none wraps around.
   stages, the largest I). Its final negative log-likelihood beside the cold start's says which limits the
   cold start: when the true phase's optimum has the lower value, the likelihood identifies the PSF and the
   search stops short of it; when the cold start's is as low, a wrong PSF fits as well and more iterations
-  cannot help.
+  cannot help. The comparison holds at equal effort only: the maximum-likelihood object fits the noise,
+  so -log L keeps falling with iterations from any start (docs/characterization_accuracy.md).
 
 Each row gives the PSF L1 distance from the truth (after the best integer shift; 2 = disjoint), that DOLP
 RMSE, the fit's final negative log-likelihood (half the Poisson deviance) and the time as a ratio to the
