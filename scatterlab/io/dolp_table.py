@@ -25,6 +25,7 @@ import numpy as np
 from scatterlab.io.table import (
     angle_factor,
     format_table,
+    mapped_columns_note,
     read_table,
     warn_if_header_disagrees,
     warn_if_radians,
@@ -181,6 +182,7 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
         )
     if dolp.size < 2:
         raise ValueError(f"{table.path}: {dolp.size} row; n and kappa need at least two geometries")
+    notes += mapped_columns_note(columns)
     return DolpData(theta_i, theta_r, phi, dolp, std, str(path), notes)
 
 

@@ -32,6 +32,7 @@ from scatterlab.io.table import (
     element_name,
     format_table,
     length_factor,
+    mapped_columns_note,
     read_table,
     time_convention_flip,
     warn_if_header_disagrees,
@@ -155,6 +156,7 @@ def read_ellipsometry(
     if opt.flip:
         E[:, 3] = -E[:, 3]
         notes.append(f"time convention {time_convention}: M23 sign-flipped to exp(+jwt)")
+    notes += mapped_columns_note(columns)
     return EllipsometryData(theta, E, S, wavelength, str(path), notes)
 
 

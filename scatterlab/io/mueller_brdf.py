@@ -54,6 +54,7 @@ from scatterlab.io.table import (
     element_name,
     format_table,
     length_factor,
+    mapped_columns_note,
     read_table,
     time_convention_flip,
     warn_if_header_disagrees,
@@ -357,6 +358,7 @@ def read_mueller_brdf(
     wi = table.find(ALIASES["wavelength"], "wavelength", columns=columns)
     wavelength = wavelength_column(table, wi, opt.length)
     theta_i, phi_i, theta_r, phi_r, notes = _angles(table, columns, opt)
+    notes += mapped_columns_note(columns)
     values, stds = element_columns(table, columns=columns)
     M, S, normalised = _mueller(table, values, stds, str(path))
     _check_elements(table, M, opt.tolerance, str(path))

@@ -548,6 +548,26 @@ def wavelength_column(table: "Table", i: int, factor: float) -> np.ndarray:
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+([eE][+-]?\d+)?$")
 
 
+def mapped_columns_note(columns) -> list[str]:
+    """The readers' note of a ``columns`` mapping (empty without one), so that a report records
+    which of the file's columns stood for which quantity.
+
+    Parameters
+    ----------
+    columns : dict or None
+        Quantity (or element name) -> the file's column name.
+
+    Returns
+    -------
+    list of str
+        One note, or none.
+    """
+    if not columns:
+        return []
+    pairs = ", ".join(f"{name!r} as {key}" for key, name in columns.items())
+    return [f"columns named by the user (columns= / --column): {pairs}"]
+
+
 def _split(line: str, delimiter):
     if delimiter is None:
         return line.split()

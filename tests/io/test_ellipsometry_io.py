@@ -126,7 +126,9 @@ def test_element_columns_of_any_name_are_mapped(tmp_path):
     )
     with pytest.raises(ValueError, match=r"not for \['m34'\].*--column std_m34=NAME"):
         read_ellipsometry(path, {"m34": "circ"})
-    assert read_ellipsometry(path, {"m34": "circ", "std_m34": "std_circ"}).std[0, 3] == 0.02
+    d = read_ellipsometry(path, {"m34": "circ", "std_m34": "std_circ"})
+    assert d.std[0, 3] == 0.02
+    assert "'circ' as m34, 'std_circ' as std_m34" in " ".join(d.notes)  # the report records it
 
 
 def test_mueller_brdf_element_columns_of_any_name_are_mapped(tmp_path):
