@@ -64,6 +64,8 @@ __all__ = [
 FORMAT_NAME = "scatterlab polarimetric dataset"
 FORMAT_VERSION = 1
 DATASET_SUFFIXES = (".h5", ".hdf5", ".npz", ".tif", ".tiff", ".toml")
+# the largest share of a geometry's light its negative counts may carry (read noise, not signal)
+NEGATIVE_SHARE = 0.1
 _OPTICS_KEYS = {
     "pixels_per_lambda_over_d": 1.0,
     "aperture_diameter_mm": 1e-3,
@@ -297,6 +299,19 @@ def _checked_counts(counts, where):
             f"{where}: 'counts' hold no photons (every count <= 0) at geometr"
             f"{'y' if len(dark) == 1 else 'ies'} {dark}: nothing to measure there"
         )
+    # dark-subtracted photo-electrons go below 0 only by read noise: over a geometry the negative
+    # part is a small fraction of the light (under 1 % for a 10 e- camera and a plate filling a
+    # tenth of the field); a large one means too much was subtracted, or the data are not counts
+    negative = np.sum(np.clip(-counts, 0, None), axis=(1, 2, 3))
+    share = negative / np.sum(np.clip(counts, 0, None), axis=(1, 2, 3))
+    if np.any(share > NEGATIVE_SHARE):
+        g = int(np.argmax(share))
+        raise ValueError(
+            f"{where}: 'counts' at geometry {g} are negative by {share[g]:.0%} of their light "
+            f"(at most {NEGATIVE_SHARE:.0%}: dark-subtracted photo-electrons go below 0 only by "
+            "the read noise): was too much dark subtracted, or are these not photo-electrons "
+            "(ADU divided by the gain)?"
+        )
     return counts
 
 
@@ -390,6 +405,7 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
         A missing key, a wrong shape, NaN, angles or wavelength out of range, too few polarizer
         orientations, bad optics or truth, naming ``where`` and the key.
     """
+    _check_keys(flat, where)
     counts, angles, notes = _channels(flat, where)
     G = counts.shape[0]
     theta_deg = _array(flat, "theta_deg", where, 1)
@@ -435,6 +451,61 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
         notes=notes,
     )
     return ds
+
+
+_TRUTH_KEYS = {
+    f"truth_{k}" for k in ("labels", "names", "n", "kappa", "sigma", "s0", "dolp", "psf")
+}
+_KEYS = {
+    "format",
+    "format_version",
+    "title",
+    "description",
+    "simulated",
+    "counts",
+    "polarizer_deg",
+    "raw",
+    "dofp_pattern_deg",
+    "theta_deg",
+    "wavelength_um",
+    "read_noise_e",
+    *_OPTICS_KEYS,
+    *_TRUTH_KEYS,
+}
+
+
+def _check_keys(flat, where) -> None:
+    """Refuse keys a dataset does not have (a misspelt ``read_noise`` would otherwise be ignored) and
+    files of another format or a newer version."""
+    import difflib
+
+    unknown = sorted(set(flat) - _KEYS)
+    if unknown:
+        hints = [
+            f"{k!r} (did you mean {close[0]!r}?)" if close else repr(k)
+            for k in unknown
+            for close in [difflib.get_close_matches(k, sorted(_KEYS), n=1, cutoff=0.6)]
+        ]
+        raise ValueError(
+            f"{where}: unknown key{'s' if len(unknown) > 1 else ''} {', '.join(hints)}; a dataset "
+            f"has {', '.join(sorted(_KEYS - _TRUTH_KEYS))} and truth_* keys"
+        )
+    name = flat.get("format")
+    if name is not None and str(np.asarray(name).reshape(()).item()) != FORMAT_NAME:
+        raise ValueError(f"{where}: 'format' is {name!r}, not {FORMAT_NAME!r}")
+    version = flat.get("format_version")
+    if version is not None:
+        try:
+            v = float(np.asarray(version).reshape(()))
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"{where}: 'format_version' must be a number, got {version!r}"
+            ) from None
+        if not (np.isfinite(v) and 1 <= v <= FORMAT_VERSION and v == int(v)):
+            raise ValueError(
+                f"{where}: 'format_version' {version!r}: this scatterlab reads version 1 to "
+                f"{FORMAT_VERSION} (a newer file needs a newer scatterlab)"
+            )
 
 
 def _bool(v) -> bool:

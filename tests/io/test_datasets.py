@@ -155,6 +155,12 @@ def edit_npz(tmp_path, **changes):
         ({"truth_dolp": np.zeros((2, 3, 3))}, "'truth_dolp' must have shape"),
         ({"truth_n": np.array([1.0])}, "one entry per label"),
         ({"raw": np.zeros((2, 12, 16))}, "both 'counts' and 'raw'"),
+        (
+            {"counts": np.broadcast_to(np.linspace(0.0, 100.0, 8) - 60.0, (2, 4, 6, 8)).copy()},
+            r"'counts' at geometry 0 are negative by \d+% of their light .*too much dark",
+        ),
+        ({"format": np.array("another format")}, "'format' is"),
+        ({"read_noise": np.array(10.0)}, r"unknown key 'read_noise' \(did you mean 'read_noise_e'"),
     ],
 )
 def test_bad_dataset_files_name_the_problem(tmp_path, changes, message):
@@ -234,12 +240,25 @@ def _sidecar_stack(tmp_path, dofp=False):
     "dofp, old, new, message",
     [
         (False, 'layout = "channels"', 'layout = "bayer"', "layout must be 'channels' or 'dofp'"),
-        (False, "wavelength_um = ", "wavelength_nm = ", "missing 'wavelength_um'"),
+        (
+            False,
+            "wavelength_um = ",
+            "wavelength_nm = ",
+            "unknown key 'wavelength_nm' \\(did you mean 'wavelength_um'\\?\\)",
+        ),
         (False, "theta_deg = [40.0", "theta_deg = [nan", "'theta_deg' contains NaN"),
         (False, "theta_deg = [40.0", "theta_deg = [-40.0", r"'theta_deg' must be in \(0, 90\)"),
         (True, "theta_deg = [40.0, ", "theta_deg = [", "2 DoFP frames for 1 geometries"),
         (True, "dofp_pattern_deg = [[", "dofp_pattern_deg = [[0.0, ", "2x2"),
-        (True, "dofp_pattern_deg = ", "pattern = ", "need 'dofp_pattern_deg'"),
+        (True, "dofp_pattern_deg = ", "pattern = ", "unknown key 'pattern'"),
+        (True, "dofp_pattern_deg = ", "# dofp_pattern_deg = ", "need 'dofp_pattern_deg'"),
+        (
+            False,
+            "read_noise_e = ",
+            "read_noise = ",
+            r"'read_noise' \(did you mean 'read_noise_e'\?\)",
+        ),
+        (False, "format_version = 1", "format_version = 7", "reads version 1 to 1"),
     ],
 )
 def test_bad_sidecars_name_the_problem(tmp_path, dofp, old, new, message):
@@ -283,3 +302,19 @@ def test_bad_hdf5_and_dofp_frames_name_the_problem(tmp_path):
         f5["raw"] = frames[0]
     with pytest.raises(ValueError, match="r.h5: 'raw' must have 3 dimensions"):
         read_dataset(raw)
+
+
+def test_negative_counts_of_read_noise_are_data():
+    """A dark field with read noise (14 e- rms after dark subtraction) around a small bright object:
+    half its pixels are negative, a few per cent of its light, and the dataset is read."""
+    rng = np.random.default_rng(5)
+    counts = rng.normal(0, 14.0, (1, 4, 8, 8))
+    counts[:, :, 3:5, 3:5] += 1e4
+    ds = PolarimetricDataset(
+        counts,
+        ANGLES_0_45_90_135,
+        np.radians([40.0]),
+        1.55e-6,
+        Optics(pixels_per_lambda_over_d=2.0),
+    )
+    assert np.mean(ds.counts < 0) > 0.4
