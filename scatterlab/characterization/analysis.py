@@ -558,7 +558,13 @@ def _markdown(ds, settings, posts, seconds, missing, scored=None) -> str:
         + "; "
         f"priors {settings.priors}; sigma {settings.sigma} (known). Run time {seconds:.0f} s."
         + (
-            " **Simulated data: the truth is shown beside every estimate.**" if ds.simulated else ""
+            (
+                " **Simulated data: the truth is shown beside every estimate.**"
+                if ds.truth is not None
+                else " Simulated data, but the file holds no truth (truth_* keys) to compare with."
+            )
+            if ds.simulated
+            else ""
         ),
         "",
         f"{ds.description}",
@@ -596,6 +602,24 @@ def _markdown(ds, settings, posts, seconds, missing, scored=None) -> str:
         lines.append(row)
         notes += [f"- **{region}:** {w}" for w in p["warnings"]]
     notes += [f"- **Region left out**, {m}" for m in missing]
+    if not settings.model_error:
+        notes.append(
+            "- **The pBRDF's own error is not in these intervals** (`--model-error` adds it, "
+            "measured against exact solutions): right for data rendered with the pBRDF, as the "
+            "bundled examples are; for a measured surface the facet model's DOLP can be off by more "
+            "than the noise, and intervals without it are too narrow."
+        )
+    missed = [
+        r
+        for r, p in posts.items()
+        if "truth" in p["n"] and not all(p[q]["covers95"] for q in ("n", "kappa"))
+    ]
+    if missed:
+        notes.append(
+            f"- **The truth lies outside the 95 % interval** for {', '.join(missed)}: the error "
+            "model leaves out something these data carry (the warnings above may say what; "
+            "restoration bias, registration or the model's own error are the usual causes)."
+        )
     if scored is not None:
         notes.append(
             f"- **Regions against the true labels** (interior pixels): total error "

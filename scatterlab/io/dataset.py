@@ -431,7 +431,10 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
     try:
         optics = Optics(**kw)
     except ValueError as exc:
-        raise ValueError(f"{where}: {exc}") from None
+        raise ValueError(
+            f"{where}: {exc} (in a file: pixels_per_lambda_over_d, or aperture_diameter_mm, "
+            "pixel_pitch_um and focal_length_mm)"
+        ) from None
     read_noise = flat.get("read_noise_e")
     if read_noise is not None and not (np.isfinite(float(read_noise)) and float(read_noise) >= 0):
         raise ValueError(f"{where}: 'read_noise_e' must be >= 0, got {read_noise}")

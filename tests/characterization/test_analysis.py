@@ -38,6 +38,12 @@ def test_analyze_runs_on_the_example_datasets(tmp_path, name):
     # simulated data: the regions are scored against the true labels, in the summary and the report
     c = s["classification_vs_labels"]
     assert 0 <= c["total_error"] <= 1 and "Regions against the true labels" in text
+    # the error model's one known omission is said; a miss of the 95 % interval gets its own note
+    assert "The pBRDF's own error is not in these intervals" in text
+    missed = [
+        r for r, p in s["posteriors"].items() if not (p["n"]["covers95"] and p["kappa"]["covers95"])
+    ]
+    assert ("The truth lies outside the 95 % interval" in text) == bool(missed)
 
 
 def test_analyze_cli_reads_a_tiff_stack_with_its_sidecar_and_names_wrong_files(tmp_path, capsys):
