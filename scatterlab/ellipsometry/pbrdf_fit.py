@@ -145,17 +145,14 @@ class PBRDFFit(IndexFitMixin):
             Parameters, their errors and covariance, fit quality, per-element RMS residuals,
             depolarization, the time-convention check, the options and the posterior summary.
         """
+        errors = dict(zip(("n", "kappa", "sigma"), self.errors.tolist()))
+        if self.options.get("sigma_known") is not None:
+            errors["sigma"] = None  # known, so no error: null, not 0
         out = {
             "n": self.n,
             "kappa": self.kappa,
             "sigma": self.sigma,
-            # a known sigma has no error: null, not 0
-            "errors": dict(
-                zip(
-                    ("n", "kappa", "sigma"),
-                    self.errors.tolist()[: 2 if self.options.get("sigma_known") else 3] + [None],
-                )
-            ),
+            "errors": errors,
             "covariance": self.covariance.tolist(),
             "cost": self.cost,
             "reduced_chi2": self.reduced_chi2,

@@ -28,6 +28,7 @@ import numpy as np
 from scatterlab.io.table import (
     ReaderOptions,
     angle_factor,
+    column_hint,
     element_columns,
     element_name,
     format_table,
@@ -190,8 +191,7 @@ def _elements(table, n, tolerance, columns=None):
     if missing:
         raise ValueError(
             f"{table.path}: missing element columns {missing} (in-plane data: m12, m22, m33, m34; "
-            f"map yours with columns={{{missing[0]!r}: NAME}}, --column {missing[0]}=NAME on the "
-            "command line)"
+            f"{column_hint(missing[0])})"
         )
     first = values.get((0, 0))
     scale = table.values[:, first[0]] if first is not None and not first[1] else np.ones(n)
@@ -214,8 +214,7 @@ def _elements(table, n, tolerance, columns=None):
         if lacking:
             raise ValueError(
                 f"{table.path}: standard deviations given for some elements but not for {lacking}"
-                f" (a column of another name: map it with columns={{'std_{lacking[0]}': NAME}}, "
-                f"--column std_{lacking[0]}=NAME on the command line)"
+                f" (under another name: {column_hint('std_' + lacking[0])})"
             )
         S = stack(stds)
         if np.any(S < 0):

@@ -50,6 +50,7 @@ from scatterlab.io.table import (
     ReaderOptions,
     angle_factor,
     circular_sign,
+    column_hint,
     element_columns,
     element_name,
     format_table,
@@ -203,8 +204,7 @@ def _mueller(table, values, stds, where):
     ]
     if missing:
         raise ValueError(
-            f"{where}: missing Mueller element columns {missing} (map yours with "
-            f"columns={{{missing[0]!r}: NAME}}, --column {missing[0]}=NAME on the command line)"
+            f"{where}: missing Mueller element columns {missing} ({column_hint(missing[0])})"
         )
     M, S = np.zeros((n, 4, 4)), np.zeros((n, 4, 4))
     scale = table.values[:, values[(0, 0)][0]] if M00_abs else np.ones(n)
@@ -221,8 +221,7 @@ def _mueller(table, values, stds, where):
         if lacking:
             raise ValueError(
                 f"{where}: standard deviations given for some elements but not for {lacking}"
-                f" (a column of another name: map it with columns={{'std_{lacking[0]}': NAME}}, "
-                f"--column std_{lacking[0]}=NAME on the command line)"
+                f" (under another name: {column_hint('std_' + lacking[0])})"
             )
         for (j, k), (i, normalised) in stds.items():
             s = table.values[:, i]
@@ -273,7 +272,7 @@ def _angles(table, columns, opt):
     if pr is None and ph is None:
         raise ValueError(
             f"{table.path}: missing column for the observation azimuth (phir, phis or a relative "
-            f"phi; map yours with columns={{'phi_r': NAME}}, --column phi_r=NAME on the command line)"
+            f"phi; {column_hint('phi_r')})"
         )
     if pr is not None and pi_ is None and ph is not None:
         pi_, ph = ph, None  # the "phii or phi": phi beside phir is the incident azimuth

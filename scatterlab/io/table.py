@@ -377,8 +377,7 @@ def element_columns(table, default_base: int | None = None, columns: dict | None
     if not parsed:
         raise ValueError(
             f"{prefix_err}: no Mueller element columns (f_r11 ... f_r44, m11 ... m44 or "
-            f"m12/m11 ...; columns: {', '.join(table.names)}; map yours with "
-            "columns={'m12': NAME}, --column m12=NAME on the command line)"
+            f"m12/m11 ...; columns: {', '.join(table.names)}; {column_hint('m12')})"
         )
     digits = {
         d
@@ -454,8 +453,7 @@ class Table:
                 raise ValueError(
                     f"{self.path}: missing column for {what} (looked for "
                     f"{', '.join(sorted(aliases))};"
-                    f" columns: {', '.join(self.names)}; map yours with columns={{{what!r}: NAME}},"
-                    f" --column {what}=NAME on the command line)"
+                    f" columns: {', '.join(self.names)}; {column_hint(what)})"
                 )
             return None
         return hits[0]
@@ -542,6 +540,23 @@ def wavelength_column(table: "Table", i: int, factor: float) -> np.ndarray:
         row = int(np.argmax(w <= 0))
         raise ValueError(f"{table.where(row)}, column {table.names[i]!r}: wavelength must be > 0")
     return w
+
+
+def column_hint(key: str) -> str:
+    """How to name the column of quantity ``key`` (``"theta"``, ``"m12"``, ``"std_m12"``) when the
+    reader does not recognise it, in the Python and the command-line spelling.
+
+    Parameters
+    ----------
+    key : str
+        A key of the readers' ``columns``.
+
+    Returns
+    -------
+    str
+        ``"map yours with columns={'key': NAME}, --column key=NAME on the command line"``.
+    """
+    return f"map yours with columns={{{key!r}: NAME}}, --column {key}=NAME on the command line"
 
 
 # a number written with a decimal comma (0,25 or -1,5e-3), which float() refuses
