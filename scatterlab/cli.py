@@ -8,7 +8,7 @@
     scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
     scatterlab analyze DATASET [--out DIR] [--force] [--psf blind|diffraction] [--iterations N]
                      [--classes adaptive|priors] [--bias-samples N] [--model-error] [--frames F]
-                     [--psf-refine none|layout]
+                     [--psf-refine none|layout] [--bad-pixels MASK.tif|.npy]
     scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--sigma S] [--time-convention exp(-iwt)]
     scatterlab fit-dolp FILE.csv [--out DIR] [--sigma S] [--noise N] [--angle-unit rad]
     scatterlab fit-ellipsometry FILE.csv [--out DIR] [--sigma S] [--time-convention exp(-iwt)]
@@ -220,12 +220,20 @@ def _analyze(args) -> int:
         frames=args.frames,
         psf_refine=args.psf_refine,
     )
-    return _report(
-        args,
-        lambda ex: analyze(
-            args.dataset, args.out, settings=settings, overwrite=args.force, executor=ex
-        ),
-    )
+
+    def run(ex):
+        dataset = args.dataset
+        if args.bad_pixels is not None:
+            from scatterlab.io import read_dataset, read_pixel_mask, with_pixel_mask
+
+            mask = read_pixel_mask(args.bad_pixels)
+            with warnings.catch_warnings():  # about pixels the mask may list: said again if not
+                warnings.simplefilter("ignore", UserWarning)
+                ds = read_dataset(dataset)
+            dataset = with_pixel_mask(ds, mask)
+        return analyze(dataset, args.out, settings=settings, overwrite=args.force, executor=ex)
+
+    return _report(args, run)
 
 
 # the quantities whose column a user can name (--column KEY=NAME), as the readers' ``columns``
@@ -824,6 +832,14 @@ def main(argv=None) -> int:
         default="none",
         help="refine each blind PSF with a few-material object (with --frames F > 1: one layout "
         "shared by the frames, whole-field PSFs; tens of times the restoration's cost)",
+    )
+    an.add_argument(
+        "--bad-pixels",
+        default=None,
+        metavar="MASK",
+        help="TIFF or .npy mask, non-zero at dead, hot or defective pixels (H x W, or one page per "
+        "geometry): left out of the restoration's likelihood and unclassified; added to the "
+        "dataset's own bad_pixels",
     )
     an.add_argument(
         "--sigma", type=float, default=0.3, help="known roughness (rms facet slope, default 0.3)"

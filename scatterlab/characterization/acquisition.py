@@ -94,6 +94,9 @@ class Acquisition:
         Share of the light the beam splitter sends to the two cameras together (0: none).
     read_noise : float
         Read noise per read [e- rms] (each image and its dark frame are read once).
+    valid : ndarray of bool, shape (H, W), or None
+        Pixels to measure with (False: dead, hot or defective; left out of the likelihood and left
+        unclassified); None: all.
     """
 
     theta: float
@@ -110,6 +113,7 @@ class Acquisition:
     diversity_phases: np.ndarray | None = None
     diversity_share: float = 0.0
     read_noise: float = 0.0
+    valid: np.ndarray | None = None
 
 
 def plate_scene(plate, labels, theta):

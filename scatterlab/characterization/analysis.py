@@ -186,6 +186,7 @@ def _acquisitions(ds, settings):
     pupil, h = _optics_psf(ds)
     H, W = ds.counts.shape[-2:]
     blank = np.full((H, W), np.nan)
+    valid = ds.valid_pixels() if hasattr(ds, "valid_pixels") else None
     out = []
     for g, th in enumerate(ds.theta):
         t = ds.truth
@@ -202,6 +203,7 @@ def _acquisitions(ds, settings):
                 pupil,
                 ts,
                 td,
+                valid=None if valid is None else valid[g],
             )
         )
     return out
@@ -272,6 +274,12 @@ def analyze(
             f"frames = {settings.frames} must divide the dataset's {K} channels into frames of at least "
             "3 polarizer channels"
         )
+    valid = ds.valid_pixels() if hasattr(ds, "valid_pixels") else None
+    if valid is not None and settings.psf_refine == "layout" and settings.psf == "blind":
+        raise ValueError(
+            "psf_refine='layout' (--psf-refine layout) cannot leave out the dataset's bad pixels yet "
+            "(bad_pixels, --bad-pixels): use psf_refine='none'"
+        )
     folder = RunFolder(out, overwrite)
     t0 = time.perf_counter()
     rng = np.random.default_rng(settings.seed)
@@ -316,7 +324,8 @@ def _restore_and_register(acqs, thetas, settings, folder, rng, executor):
 
 
 def _layout(images, thetas, settings) -> np.ndarray:
-    """Metal (1) / dielectric (0) map in object coordinates (:class:`AnalyzeSettings`, ``classes``)."""
+    """Metal (1) / dielectric (0) map in object coordinates (:class:`AnalyzeSettings`, ``classes``);
+    -1 where no geometry measured the pixel (bad pixels, or no light): unclassified."""
     from scatterlab.deconvolution import PRIOR_SETS, adaptive_priors, classify_dolp
 
     priors = PRIOR_SETS[settings.priors]
@@ -325,12 +334,25 @@ def _layout(images, thetas, settings) -> np.ndarray:
         cls = (
             im.classes if im.classes is not None else classify_dolp(np.nan_to_num(im.dolp), priors)
         )
-    else:
-        with warnings.catch_warnings():  # a pixel without light at every geometry: NaN, then 0
-            warnings.simplefilter("ignore", RuntimeWarning)
-            mean = np.nan_to_num(np.nanmean(np.stack([im.dolp for im in images]), axis=0))
-        cls = classify_dolp(mean, adaptive_priors(mean, priors))
-    return (np.asarray(cls) > 0).astype(int)
+        return np.where(np.isfinite(im.dolp) & (cls >= 0), np.asarray(cls) > 0, -1).astype(int)
+    with warnings.catch_warnings():  # a pixel unmeasured at every geometry: NaN, unclassified
+        warnings.simplefilter("ignore", RuntimeWarning)
+        mean = np.nanmean(np.stack([im.dolp for im in images]), axis=0)
+    known = np.isfinite(mean)
+    cls = classify_dolp(np.where(known, mean, 0.0), adaptive_priors(mean[known], priors))
+    return np.where(known, np.asarray(cls) > 0, -1).astype(int)
+
+
+def _filled(layout) -> np.ndarray:
+    """``layout`` with each unclassified pixel (-1) given its nearest classified pixel's class: the plate
+    the self-calibration re-simulates (the regions themselves leave those pixels out)."""
+    from scipy import ndimage
+
+    unknown = np.asarray(layout) < 0
+    if not unknown.any():
+        return layout
+    nearest = ndimage.distance_transform_edt(unknown, return_distances=False, return_indices=True)
+    return np.asarray(layout)[tuple(nearest)]
 
 
 def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
@@ -361,7 +383,16 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
     samples = settings.bias_samples if blind else 1
     draws = [
         restoration_bias(
-            regions, layout, thetas, psfs, cfg, rng, sel, margin, blind=blind, executor=executor
+            regions,
+            _filled(layout),
+            thetas,
+            psfs,
+            cfg,
+            rng,
+            sel,
+            margin,
+            blind=blind,
+            executor=executor,
         )
         for _ in range(samples)
     ]
@@ -413,7 +444,7 @@ def _classification_vs_labels(ds, layout) -> dict | None:
     t = ds.truth
     if t is None or not ds.simulated or np.shape(t.labels) != np.shape(layout):
         return None
-    sel = interior(layout.shape, max(2, layout.shape[0] // 16))
+    sel = interior(layout.shape, max(2, layout.shape[0] // 16)) & (layout >= 0)
     metal = tuple(range(1, len(t.names)))
     return classification_errors(layout, t.labels, metal_classes=metal, mask=sel)
 
@@ -474,7 +505,9 @@ def _write(folder, ds, settings, images, layout, maps, estimates, seconds, missi
         "seconds": seconds,
         "theta_deg": np.degrees(ds.theta).tolist(),
         "posteriors": posts,
-        "metal_share": float(layout.mean()),
+        "metal_share": float(np.mean(layout[layout >= 0])),
+        "unclassified_pixels": int(np.sum(layout < 0)),
+        "data_notes": list(ds.notes),
         "regions_left_out": missing,
     }
     scored = _classification_vs_labels(ds, layout)
@@ -482,7 +515,7 @@ def _write(folder, ds, settings, images, layout, maps, estimates, seconds, missi
         summary["classification_vs_labels"] = scored
     write_json(folder.path / "summary.json", summary, overwrite=True)
     _maps_figure(folder.path, images, layout, maps, ds, save_png)
-    text = _markdown(ds, settings, posts, seconds, missing, scored)
+    text = _markdown(ds, settings, posts, seconds, missing, scored, int(np.sum(layout < 0)))
     report = write_text(folder.report, text, overwrite=True)
     import shutil
 
@@ -510,15 +543,17 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
         if title == "regions":
             ax.imshow(
                 img,
-                cmap=ListedColormap(["#2e7d32", "#9e9e9e"]),
-                vmin=-0.5,
+                cmap=ListedColormap(["#d81b60", "#2e7d32", "#9e9e9e"]),
+                vmin=-1.5,
                 vmax=1.5,
                 interpolation="nearest",
             )
+            unmeasured = [Patch(color="#d81b60", label="unmeasured")] if np.any(img < 0) else []
             ax.legend(
                 handles=[
                     Patch(color="#2e7d32", label="dielectric"),
                     Patch(color="#9e9e9e", label="metal"),
+                    *unmeasured,
                 ],
                 fontsize=7,
                 loc="lower right",
@@ -542,7 +577,7 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
     save_png(fig, Path(path) / "maps.png")
 
 
-def _markdown(ds, settings, posts, seconds, missing, scored=None) -> str:
+def _markdown(ds, settings, posts, seconds, missing, scored=None, unclassified=0) -> str:
     lines = [
         f"# Analysis: {ds.title or 'polarimetric dataset'}",
         "",
@@ -602,6 +637,12 @@ def _markdown(ds, settings, posts, seconds, missing, scored=None) -> str:
         lines.append(row)
         notes += [f"- **{region}:** {w}" for w in p["warnings"]]
     notes += [f"- **Region left out**, {m}" for m in missing]
+    notes += [f"- **Data:** {n}." for n in ds.notes]
+    if unclassified:
+        notes.append(
+            f"- **{unclassified} pixels are unclassified** (magenta in the regions map): no geometry "
+            "measured them (bad pixels, or no light), so they are in neither region."
+        )
     if not settings.model_error:
         notes.append(
             "- **The pBRDF's own error is not in these intervals** (`--model-error` adds it, "

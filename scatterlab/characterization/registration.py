@@ -189,8 +189,10 @@ class Registered:
     kind : str
         As the restoration (``"degraded"``, ``"restored"``, ``"corrected"``).
     s0, dolp : ndarray, shape (H, W)
-        Irradiance [photo-electrons] and DOLP (NaN where there is no light).
+        Irradiance [photo-electrons] and DOLP (NaN where there is no light, and where the restoration
+        had unmeasured pixels: ``Restoration.valid``).
     classes : ndarray of int, shape (H, W), or None
+        -1 where unmeasured.
     shift : ndarray, shape (2,)
         Translation applied after the keystone stretch [object pixels].
     """
@@ -237,9 +239,19 @@ def register_restoration(
             np.asarray(rest.s0, float),
             None if rest.classes is None else rest.classes.astype(float),
         )
+    valid = getattr(rest, "valid", None)
+    if valid is not None:  # unmeasured pixels: carried along, so that none of their guess leaks out
+        valid = np.asarray(valid, float)
+        valid = keystone_correct(valid, theta_r) if foreshortened else valid
     shift = np.zeros(2) if reference is None else estimate_shift(reference, s0)
     if reference is not None:
         s0, dolp = apply_shift(s0, shift), apply_shift(dolp, shift)
         cls = None if cls is None else apply_shift(cls, shift, order=0)
+        valid = None if valid is None else apply_shift(valid, shift)
     dolp = np.where(s0 > 0, dolp, np.nan)
-    return Registered(rest.kind, s0, dolp, None if cls is None else np.rint(cls).astype(int), shift)
+    cls = None if cls is None else np.rint(cls).astype(int)
+    if valid is not None:
+        measured = valid > 0.999  # every pixel an interpolated value draws on was measured
+        dolp = np.where(measured, dolp, np.nan)
+        cls = None if cls is None else np.where(measured, cls, -1)
+    return Registered(rest.kind, s0, dolp, cls, shift)

@@ -82,6 +82,9 @@ class Restoration:
         Poisson log-likelihood per EM iteration of the maximum-likelihood phase (never decreasing).
     loglik_classes : ndarray or None
         Log-likelihood during the continuation with the priors (the classification).
+    valid : ndarray of bool, shape (H, W), or None
+        The measured pixels (the acquisition's ``valid``): elsewhere ``dolp`` is NaN and ``classes`` -1,
+        since the estimate there is the restoration's guess from the pixels around; None: all.
     """
 
     kind: str
@@ -91,6 +94,7 @@ class Restoration:
     psf: np.ndarray | None = None
     loglik: np.ndarray | None = None
     loglik_classes: np.ndarray | None = None
+    valid: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -170,12 +174,26 @@ def degraded(acq: Acquisition, priors=None) -> Restoration:
     S = stokes_from_channels(acq.counts, acq.angles)
     dolp = signed_dolp(S)
     classes = classify_dolp(np.nan_to_num(dolp, nan=0.0), priors) if priors else None
-    return Restoration("degraded", S[..., 0], dolp, classes)
+    return _unmeasured(Restoration("degraded", S[..., 0], dolp, classes), acq.valid)
+
+
+def _unmeasured(rest: Restoration, valid) -> Restoration:
+    """``rest`` with its DOLP NaN and its classes -1 where ``valid`` (H, W) is False."""
+    if valid is None:
+        return rest
+    valid = np.asarray(valid, bool)
+    rest.valid = valid
+    rest.dolp = np.where(valid, rest.dolp, np.nan)
+    if rest.classes is not None:
+        rest.classes = np.where(valid, rest.classes, -1)
+    return rest
 
 
 def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int) -> str:
     h = hashlib.sha256(np.ascontiguousarray(acq.counts).tobytes())
     h.update(np.ascontiguousarray(acq.angles).tobytes())
+    if acq.valid is not None:
+        h.update(np.packbits(np.asarray(acq.valid, bool)).tobytes())
     if ideal.psf or acq.d_over_r0 is None:
         h.update(np.ascontiguousarray(acq.psf_true).tobytes())
     if acq.diversity_counts is not None:  # the cameras' frames and the fit's constants
@@ -275,7 +293,7 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     radius, pad = (np.sqrt(2) * H / 2, H // 2) if known_psf else (H / 4, int(np.ceil(H / 4)))
     grid = object_grid((H, W), radius, pad=pad)
     F = settings.frames
-    kw = dict(psf_radius=radius, pad=pad, pupil=acq.pupil, frames=F)
+    kw = dict(psf_radius=radius, pad=pad, pupil=acq.pupil, frames=F, mask=acq.valid)
     if diversity:  # the PSF phase diversity finds, then held fixed
         psf0, mode = resample_psf(phase_diversity_psf(acq), grid), "fixed"
     elif known_psf:  # one known PSF, the same for every frame
@@ -368,9 +386,10 @@ def restore(
         if path.exists():
             with np.load(path, allow_pickle=False) as z:
                 cls = z["classes"] if z["classes"].size else None
-                return Restoration(
+                rest = Restoration(
                     kind, z["s0"], z["dolp"], cls, z["psf"], z["loglik"], z["loglik_classes"]
                 )
+                return _unmeasured(rest, acq.valid)
     s0, dolp, classes, psf, loglik, loglik_classes = _em(acq, settings, known, seed)
     if path is not None:
         from scatterlab.runtime.results import write_npz
@@ -385,4 +404,4 @@ def restore(
             loglik_classes=loglik_classes,
             classes=np.zeros(0, int) if classes is None else classes,
         )
-    return Restoration(kind, s0, dolp, classes, psf, loglik, loglik_classes)
+    return _unmeasured(Restoration(kind, s0, dolp, classes, psf, loglik, loglik_classes), acq.valid)

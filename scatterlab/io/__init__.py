@@ -16,7 +16,14 @@ Bad input raises ValueError naming the file, row and field.
 * Example files of every format: ``python -m scatterlab.io.examples OUT`` (simulated, labelled so).
 """
 
-from scatterlab.io.dataset import Optics, PolarimetricDataset, Truth, read_dataset, write_dataset
+from scatterlab.io.dataset import (
+    Optics,
+    PolarimetricDataset,
+    Truth,
+    read_dataset,
+    with_pixel_mask,
+    write_dataset,
+)
 from scatterlab.io.dofp import SONY_POLARSENS, demosaic, mosaic
 from scatterlab.io.dolp_table import DolpData, read_dolp_table, write_dolp_table
 from scatterlab.io.ellipsometry import EllipsometryData, read_ellipsometry, write_ellipsometry
@@ -39,6 +46,7 @@ __all__ = [
     "Truth",
     "read_dataset",
     "write_dataset",
+    "with_pixel_mask",
     "demosaic",
     "mosaic",
     "SONY_POLARSENS",

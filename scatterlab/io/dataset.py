@@ -13,6 +13,11 @@ from measured (or simulated) data:
 * ``optics`` (:class:`Optics`): sampling of the PSF, pixels per lambda/D, or the aperture diameter,
   pixel pitch and focal length;
 * ``read_noise`` [e- rms] or None when unknown;
+* ``bad_pixels`` (G, H, W) bool or None: pixels to leave out (dead, hot, defective). They do not
+  enter the likelihood of the restoration, and the analysis leaves them unclassified. Saturated
+  pixels are better kept than listed when they cover much of a region: dropping them leaves the
+  restoration guessing that region's light, which then stays in its neighbours' halo (measured on
+  the simulated example in ``docs/characterization_accuracy.md``);
 * ``truth`` (:class:`Truth`) or None: what a simulation knows (labels, indices, roughness, the
   object's S0 and DOLP, the PSFs); None for measurements;
 * ``title``, ``description`` (str) and ``simulated`` (bool, True for simulated data, always said so
@@ -35,13 +40,16 @@ Files (all hold the same keys; degrees and micrometres in files, radians and met
 :func:`read_dataset` picks the reader from the file name. Keys: ``counts`` or ``raw``;
 ``polarizer_deg`` (K,); ``dofp_pattern_deg`` (2, 2); ``theta_deg`` (G,); ``wavelength_um``;
 ``pixels_per_lambda_over_d``, ``aperture_diameter_mm``, ``pixel_pitch_um``, ``focal_length_mm``
-(optics; give the first or the other three); ``read_noise_e``; ``title``; ``description``;
+(optics; give the first or the other three); ``read_noise_e``; ``bad_pixels`` ((H, W) for the
+sensor, or (G, H, W) per geometry, non-zero = bad; for DoFP data (2H, 2W) or (G, 2H, 2W) on the raw
+frame, a superpixel being bad when any of its four pixels is); ``title``; ``description``;
 ``simulated``; ``truth_labels`` (H, W), ``truth_names`` (L,), ``truth_n``, ``truth_kappa``,
 ``truth_sigma`` (L,), ``truth_s0``, ``truth_dolp``, ``truth_psf`` (G, H, W).
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -57,6 +65,7 @@ __all__ = [
     "from_flat",
     "read_dataset",
     "write_dataset",
+    "with_pixel_mask",
     "DATASET_SUFFIXES",
     "FORMAT_NAME",
 ]
@@ -66,6 +75,10 @@ FORMAT_VERSION = 1
 DATASET_SUFFIXES = (".h5", ".hdf5", ".npz", ".tif", ".tiff", ".toml")
 # the largest share of a geometry's light its negative counts may carry (read noise, not signal)
 NEGATIVE_SHARE = 0.1
+# the smallest share of a geometry's pixels that bad_pixels may leave to measure
+MIN_VALID_SHARE = 0.1
+LEFT_OUT_NOTE = "pixels left out of the likelihood per geometry"
+DEAD_PIXEL_NOTE = "pixels read <= 0 in every channel at every geometry"
 _OPTICS_KEYS = {
     "pixels_per_lambda_over_d": 1.0,
     "aperture_diameter_mm": 1e-3,
@@ -178,6 +191,7 @@ class PolarimetricDataset:
     simulated: bool = False
     source: str = ""
     notes: list = field(default_factory=list)
+    bad_pixels: np.ndarray | None = None
 
     def __post_init__(self):
         flat = to_flat(self)
@@ -188,6 +202,18 @@ class PolarimetricDataset:
             checked.theta,
         )
         self.wavelength = checked.wavelength
+        self.bad_pixels = checked.bad_pixels
+        self.notes = list(self.notes) + [n for n in checked.notes if n not in self.notes]
+
+    def valid_pixels(self) -> np.ndarray | None:
+        """The pixels to measure with at each geometry: those not in ``bad_pixels``.
+
+        Returns
+        -------
+        ndarray (G, H, W) of bool, or None
+            None when every pixel is valid.
+        """
+        return _valid(self.counts, self.bad_pixels)
 
     @property
     def shape(self) -> tuple:
@@ -243,6 +269,12 @@ def to_flat(ds: PolarimetricDataset, *, dofp_pattern=None) -> dict:
             flat[key] = float(value) / _OPTICS_KEYS[key]
     if ds.read_noise is not None:
         flat["read_noise_e"] = float(ds.read_noise)
+    bad = getattr(ds, "bad_pixels", None)
+    if bad is not None and np.any(bad):
+        bad = np.asarray(bad, bool)
+        if dofp_pattern is not None:  # on the raw frame: each superpixel's four pixels
+            bad = np.repeat(np.repeat(bad, 2, axis=-2), 2, axis=-1)
+        flat["bad_pixels"] = bad.astype(np.uint8)
     t = ds.truth
     if t is not None:
         flat.update(
@@ -385,6 +417,65 @@ def _truth(flat, counts_shape, where):
     return Truth(labels.astype(int), names, *props, **maps)
 
 
+def _bad_pixels(flat, counts_shape, where):
+    """``bad_pixels`` as a (G, H, W) bool array (None without the key): (H, W) or (G, H, W), or the
+    same on the DoFP raw frame (2H, 2W), where a superpixel is bad when any of its pixels is."""
+    if "bad_pixels" not in flat:
+        return None
+    G, _, H, W = counts_shape
+    a = _array(flat, "bad_pixels", where, np.ndim(flat["bad_pixels"]))
+    if "raw" in flat and a.shape[-2:] == (2 * H, 2 * W) and a.ndim in (2, 3):
+        a = a.reshape(a.shape[:-2] + (H, 2, W, 2)).any(axis=(-3, -1))
+    if a.ndim == 2:
+        a = np.broadcast_to(a, (G,) + a.shape)
+    if a.shape != (G, H, W):
+        raw = f" (or {(2 * H, 2 * W)} on the raw frame)" if "raw" in flat else ""
+        raise ValueError(
+            f"{where}: 'bad_pixels' must have shape (H, W) = {(H, W)} or (G, H, W) = "
+            f"{(G, H, W)}{raw}, got {a.shape}"
+        )
+    return a != 0
+
+
+def _valid(counts, bad):
+    """(G, H, W) bool of the pixels to measure with, or None when all are."""
+    if bad is None or not np.any(bad):
+        return None
+    return np.broadcast_to(~np.asarray(bad, bool), counts.shape[:1] + counts.shape[2:]).copy()
+
+
+def _dead_pixel_note(counts, valid, read_noise, where):
+    """A note (and a warning) for pixels that read <= 0 in every channel at every geometry inside lit
+    parts of the image: dead pixels that ``bad_pixels`` should list, or the analysis takes them for
+    black spots. A real dark-subtracted pixel under light is never <= 0 in all of several reads."""
+    from scipy import ndimage
+
+    G, K = counts.shape[:2]
+    if G * K < 6:  # too few reads to tell a dead pixel from a dim one
+        return None
+    dead = np.all(counts <= 0, axis=(0, 1))
+    if valid is not None:
+        dead &= np.any(valid, axis=0)  # already listed
+    if not dead.any():
+        return None
+    # the light around them: each dead pixel takes its nearest live neighbour's mean count
+    mean = np.mean(counts, axis=(0, 1))
+    nearest = ndimage.distance_transform_edt(dead, return_distances=False, return_indices=True)
+    level = ndimage.median_filter(mean[tuple(nearest)], size=7, mode="nearest")
+    lit = level > 20.0 * max(read_noise or 0.0, 1.0)
+    suspects = dead & lit
+    if not suspects.any():
+        return None
+    r, c = (int(v[0]) for v in np.nonzero(suspects))
+    note = (
+        f"{int(suspects.sum())} {DEAD_PIXEL_NOTE} inside lit "
+        f"parts of the image (the first at row {r}, column {c}): dead pixels? List them in "
+        "'bad_pixels', or the analysis takes them for black, non-reflecting spots"
+    )
+    warnings.warn(f"{where}: {note}", UserWarning, stacklevel=3)
+    return note
+
+
 def from_flat(flat: dict, where: str) -> PolarimetricDataset:
     """Validate the flat dict of file keys and build the dataset.
 
@@ -438,8 +529,25 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
     read_noise = flat.get("read_noise_e")
     if read_noise is not None and not (np.isfinite(float(read_noise)) and float(read_noise) >= 0):
         raise ValueError(f"{where}: 'read_noise_e' must be >= 0, got {read_noise}")
+    bad = _bad_pixels(flat, counts.shape, where)
+    valid = _valid(counts, bad)
+    if valid is not None:
+        share = valid.mean(axis=(1, 2))
+        if np.any(share < MIN_VALID_SHARE):
+            g = int(np.argmin(share))
+            raise ValueError(
+                f"{where}: 'bad_pixels' leaves {share[g]:.1%} of the pixels at geometry {g} to "
+                f"measure with (at least {MIN_VALID_SHARE:.0%}): is it non-zero only where a pixel "
+                "is bad?"
+            )
+        per = (~valid).sum(axis=(1, 2)).tolist()
+        notes.append(f"{LEFT_OUT_NOTE}: {per} of {valid[0].size} (listed in bad_pixels)")
+    dead = _dead_pixel_note(counts, valid, read_noise and float(read_noise), where)
+    if dead:
+        notes.append(dead)
     ds = object.__new__(PolarimetricDataset)  # validated here: skip __post_init__'s round trip
     ds.__dict__.update(
+        bad_pixels=bad,
         counts=counts,
         polarizer_angles=angles,
         theta=np.radians(theta_deg),
@@ -472,6 +580,7 @@ _KEYS = {
     "theta_deg",
     "wavelength_um",
     "read_noise_e",
+    "bad_pixels",
     *_OPTICS_KEYS,
     *_TRUTH_KEYS,
 }
@@ -588,3 +697,32 @@ def write_dataset(
     if suffix not in writers:
         raise ValueError(f"{path}: dataset files end in {sorted(writers)}")
     return writers[suffix](path, ds, dofp_pattern=dofp_pattern, overwrite=overwrite)
+
+
+def with_pixel_mask(ds: PolarimetricDataset, bad_pixels) -> PolarimetricDataset:
+    """``ds`` with ``bad_pixels`` added to its own (``scatterlab analyze --bad-pixels FILE``).
+
+    Parameters
+    ----------
+    ds : PolarimetricDataset
+    bad_pixels : array_like (H, W) or (G, H, W)
+        Non-zero where a pixel is bad (dead, hot, defective).
+
+    Returns
+    -------
+    PolarimetricDataset
+        Validated as a file's keys are (ValueError naming ``bad_pixels``).
+    """
+    flat = to_flat(ds)
+    G, _, H, W = ds.counts.shape
+    extra = _bad_pixels({"bad_pixels": bad_pixels}, ds.counts.shape, "bad_pixels")
+    own = flat.get("bad_pixels")
+    own = np.zeros((G, H, W), bool) if own is None else np.broadcast_to(own != 0, (G, H, W))
+    flat["bad_pixels"] = (extra | own).astype(np.uint8)
+    out = from_flat(flat, ds.source or "dataset")
+    # keep the notes of the reading (e.g. the DoFP demosaicing), not those the new mask replaces
+    own_notes = (DEAD_PIXEL_NOTE, LEFT_OUT_NOTE)
+    out.notes = [
+        n for n in ds.notes if not any(o in n for o in own_notes) and n not in out.notes
+    ] + out.notes
+    return out

@@ -7,7 +7,9 @@ The keys are those of :mod:`scatterlab.io.dataset`.
 * TIFF: the images as pages (``counts``: G*K pages, geometry-major -- geometry 0's channels first;
   ``raw``: one page per geometry) and a sidecar ``NAME.toml`` holding every other key, ``layout =
   "channels"`` or ``"dofp"``, and optionally ``tiff`` (the stack's file name, or a list of one file
-  per geometry) and ``truth`` (an NPZ file with the ``truth_*`` arrays). A user's own stack needs
+  per geometry), ``truth`` (an NPZ file with the ``truth_*`` arrays) and ``bad_pixels`` (the name of
+  a TIFF, one page for the sensor or one per geometry, or of a ``.npy`` file: non-zero = bad).
+  A user's own stack needs
   only a sidecar such as::
 
       wavelength_um = 1.55
@@ -33,6 +35,7 @@ __all__ = [
     "write_dataset_npz",
     "read_dataset_tiff",
     "write_dataset_tiff",
+    "read_pixel_mask",
 ]
 
 _IMAGES = ("counts", "raw")
@@ -211,6 +214,7 @@ def write_dataset_tiff(
     pages = np.asarray(flat.pop(key), np.float32)
     pages = pages.reshape((-1,) + pages.shape[-2:])
     truth = {k: flat.pop(k) for k in list(flat) if k.startswith("truth_")}
+    bad = flat.pop("bad_pixels", None)
     lines = [
         f"# {FORMAT_NAME}: sidecar of {path.name} (pages: "
         + (
@@ -227,6 +231,12 @@ def write_dataset_tiff(
             path.parent / name, overwrite=overwrite, **{k: _store(v) for k, v in truth.items()}
         )
         lines.append(f'truth = "{name}"')
+    if bad is not None:
+        name = f"{path.stem}-bad_pixels.tif"
+        mask = io.BytesIO()
+        tifffile.imwrite(mask, np.asarray(bad, np.uint8), photometric="minisblack")
+        atomic_write_bytes(path.parent / name, mask.getvalue(), overwrite=overwrite)
+        lines.append(f'bad_pixels = "{name}"')
     lines += [f"{k} = {_toml_value(v)}" for k, v in flat.items()]
     buf = io.BytesIO()
     tifffile.imwrite(buf, pages, photometric="minisblack")
@@ -282,6 +292,44 @@ def _load_pages(side: Path, meta: dict, default: Path) -> np.ndarray:
     return np.concatenate(stacks)
 
 
+def read_pixel_mask(path) -> np.ndarray:
+    """A bad-pixel mask file: a TIFF (one page for the sensor, or one per geometry) or a ``.npy``.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    ndarray (H, W) or (G, H, W)
+        Non-zero where a pixel is bad (the dataset key ``bad_pixels``).
+
+    Raises
+    ------
+    ValueError
+        A missing or unreadable file, named.
+    """
+    import tifffile
+
+    f = Path(path)
+    if not f.exists():
+        raise ValueError(f"bad-pixel mask {f}: no such file")
+    try:
+        if f.suffix.lower() == ".npy":
+            return np.load(f, allow_pickle=False)
+        return np.asarray(tifffile.imread(f))
+    except Exception as exc:  # tifffile and numpy raise several kinds for a damaged file
+        raise ValueError(f"bad-pixel mask {f}: not a readable TIFF or .npy ({exc})") from None
+
+
+def _load_mask(side: Path, name: str) -> np.ndarray:
+    """The ``bad_pixels`` file a sidecar names."""
+    try:
+        return read_pixel_mask(side.parent / name)
+    except ValueError as exc:
+        raise ValueError(f"{side}: 'bad_pixels' names {name}: {exc}") from None
+
+
 def read_dataset_tiff(path) -> PolarimetricDataset:
     """Read a TIFF stack and its sidecar TOML.
 
@@ -329,6 +377,8 @@ def read_dataset_tiff(path) -> PolarimetricDataset:
             raise ValueError(
                 f"{side}: truth file {truth!r} is not a readable NPZ ({exc})"
             ) from None
+    if isinstance(meta.get("bad_pixels"), str):
+        meta["bad_pixels"] = _load_mask(side, meta["bad_pixels"])
     G = len(np.atleast_1d(meta.get("theta_deg", [])))
     if layout == "dofp":
         if pages.shape[0] != G:

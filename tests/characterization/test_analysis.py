@@ -3,6 +3,7 @@
 clear errors for the wrong kind of file."""
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -166,3 +167,91 @@ def test_analyze_covers_the_truth_of_the_simulated_example(tmp_path, name):
         for q, t in zip(("n", "kappa"), truth[region]):
             assert p[q]["truth"] == pytest.approx(t)
             assert p[q]["covers95"], (region, q, p[q])
+
+
+def test_dead_pixels_listed_in_bad_pixels_are_left_out_not_taken_for_metal(tmp_path):
+    """A block of dead pixels (0 counts) in the paint reads as a black spot of DOLP 0: classified metal
+    and pulled into the metal's region. Listed in ``bad_pixels`` it leaves the likelihood, stays
+    unclassified, and the paint comes out at its truth (independent truth: the simulated indices)."""
+    import h5py
+
+    from scatterlab.characterization import Plate, SceneConfig, acquire
+    from scatterlab.characterization.scene_config import plate_labels
+    from scatterlab.io import Optics, PolarimetricDataset, Truth, with_pixel_mask
+
+    cfg = SceneConfig(image_size=64).validate()
+    rng = np.random.default_rng(4)
+    labels = plate_labels(cfg, rng)
+    thetas = np.radians([30.0, 45.0, 60.0])
+    acqs = [acquire(Plate(), labels, th, "no_turbulence", None, cfg, rng) for th in thetas]
+    counts = np.stack([a.counts for a in acqs])
+    # a 5 x 3 dead block on paint near the centre column (the keystone barely moves it)
+    rows, cols = np.nonzero(labels[20:44, 28:36] == 0)
+    r0, c0 = 20 + rows[len(rows) // 2], 28 + cols[len(cols) // 2]
+    block = np.zeros((64, 64), bool)
+    block[r0 - 2 : r0 + 3, c0 - 1 : c0 + 2] = True
+    counts[:, :, block] = 0.0
+    truth = Truth(
+        labels,
+        ["paint", "metal", "scratch"],
+        np.array([1.39, 1.44, 1.44]),
+        np.array([0.34, 16, 16]),
+        np.full(3, 0.3),
+    )
+    with pytest.warns(UserWarning, match="dead pixels"):
+        ds = PolarimetricDataset(
+            counts,
+            acqs[0].angles,
+            thetas,
+            1.55e-6,
+            Optics(pixels_per_lambda_over_d=2.0),
+            read_noise=10.0,
+            truth=truth,
+            simulated=True,
+        )
+    settings = AnalyzeSettings(psf="diffraction", iterations=100, posterior_steps=600)
+    layouts = {}
+    for name, data in (("dead", ds), ("listed", with_pixel_mask(ds, block))):
+        analyze(data, tmp_path / name, settings=settings)
+        with h5py.File(tmp_path / name / "results.h5") as f5:
+            layouts[name] = f5["layout"][()]
+    core = np.zeros_like(block)
+    core[r0 - 1 : r0 + 2, c0] = True
+    assert np.all(layouts["dead"][core] == 1)  # the defect: a black spot is "metal"
+    assert np.all(layouts["listed"][core] == -1)
+    # only pixels near the block are unclassified, and the rest is classified as before
+    near = np.broadcast_to(np.abs(np.arange(64)[:, None] - r0) <= 3, (64, 64))
+    assert np.all(near[layouts["listed"] == -1])
+    s = json.loads((tmp_path / "listed" / "summary.json").read_text())
+    p = s["posteriors"]["dielectric"]
+    assert p["n"]["covers95"] and p["kappa"]["covers95"], p
+    assert abs(p["n"]["median"] - 1.39) < 0.05 and abs(p["kappa"]["median"] - 0.34) < 0.1, p
+    text = (tmp_path / "listed" / "report.md").read_text()
+    assert "pixels are unclassified" in text and "listed in bad_pixels" in text
+    assert s["unclassified_pixels"] == int(np.sum(layouts["listed"] == -1)) > 0
+
+
+def test_analyze_cli_takes_a_bad_pixel_mask(tmp_path, capsys):
+    h5 = str(EXAMPLES / "painted_plate.h5")
+    mask = np.zeros((64, 64), np.uint8)
+    mask[10:12, 10:12] = 1
+    np.save(tmp_path / "mask.npy", mask)
+    args = ["--iterations", "4", "--posterior-steps", "200"]
+    out = tmp_path / "m"
+    assert (
+        main(["analyze", h5, "--out", str(out), "--bad-pixels", str(tmp_path / "mask.npy"), *args])
+        == 0
+    )
+    assert "[4, 4] of 4096 (listed in bad_pixels)" in (out / "report.md").read_text()
+    np.save(tmp_path / "wrong.npy", np.zeros((3, 64, 64)))
+    for name, message in (
+        ("missing.npy", "no such file"),
+        ("wrong.npy", r"'bad_pixels' must have shape \(H, W\) = \(64, 64\)"),
+    ):
+        assert (
+            main(
+                ["analyze", h5, "--out", str(tmp_path / "x"), "--bad-pixels", str(tmp_path / name)]
+            )
+            == 2
+        )
+        assert re.search(message, capsys.readouterr().err)

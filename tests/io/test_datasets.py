@@ -318,3 +318,89 @@ def test_negative_counts_of_read_noise_are_data():
         Optics(pixels_per_lambda_over_d=2.0),
     )
     assert np.mean(ds.counts < 0) > 0.4
+
+
+# ------------------------------------------------------------------------------------ bad pixels
+def test_bad_pixels_round_trip_in_every_format(tmp_path):
+    """A sensor mask (H, W) applies to every geometry, a (G, H, W) one per geometry; both survive
+    every file format (the TIFF's mask as its own file) and add to a dataset's own."""
+    from scatterlab.io import with_pixel_mask
+
+    ds = small()
+    bad = np.zeros((6, 8), bool)
+    bad[2, 3] = bad[4, 0] = True
+    masked = with_pixel_mask(ds, bad)
+    valid = masked.valid_pixels()
+    assert valid.shape == (2, 6, 8) and np.array_equal(valid, np.broadcast_to(~bad, (2, 6, 8)))
+    assert any("left out of the likelihood per geometry: [2, 2]" in n for n in masked.notes)
+    for suffix in (".h5", ".npz", ".tif"):
+        back = read_dataset(write_dataset(tmp_path / f"m{suffix}", masked))
+        assert np.array_equal(back.valid_pixels(), valid), suffix
+    assert (tmp_path / "m-bad_pixels.tif").exists()
+    per_geometry = np.zeros((2, 6, 8), bool)
+    per_geometry[1, 0, 0] = True
+    both = with_pixel_mask(masked, per_geometry).valid_pixels()
+    assert np.array_equal(both, valid & ~per_geometry)
+    # no mask: every pixel measured
+    assert ds.valid_pixels() is None
+    assert read_dataset(write_dataset(tmp_path / "n.npz", ds)).bad_pixels is None
+
+
+def test_bad_pixels_on_a_dofp_raw_frame_mark_their_superpixel(tmp_path):
+    ds = small()
+    path = write_dataset(tmp_path / "raw.npz", ds, dofp_pattern=((90, 45), (135, 0)))
+    with np.load(path) as z:
+        flat = {k: z[k] for k in z.files}
+    raw_bad = np.zeros(flat["raw"].shape[1:], np.uint8)
+    raw_bad[5, 2] = 1  # row 5, column 2 of the raw frame: superpixel (2, 1)
+    np.savez(tmp_path / "b.npz", bad_pixels=raw_bad, **flat)
+    valid = read_dataset(tmp_path / "b.npz").valid_pixels()
+    assert np.array_equal(np.argwhere(~valid[0]), [[2, 1]]) and not valid[1, 2, 1]
+
+
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"bad_pixels": np.zeros((3, 6, 8))}, r"'bad_pixels' must have shape \(H, W\) = \(6, 8\)"),
+        ({"bad_pixels": np.zeros((5, 8))}, "'bad_pixels' must have shape"),
+        ({"bad_pixels": np.full((6, 8), np.nan)}, "'bad_pixels' contains NaN"),
+        ({"bad_pixels": np.ones((6, 8))}, r"leaves 0.0% of the pixels at geometry 0"),
+        ({"bad_pixel": np.zeros((6, 8))}, r"did you mean 'bad_pixels'"),
+    ],
+)
+def test_bad_pixel_keys_name_the_problem(tmp_path, changes, message):
+    with pytest.raises(ValueError, match=message):
+        read_dataset(edit_npz(tmp_path, **changes))
+
+
+def test_dead_pixels_inside_light_are_pointed_out_and_a_dark_field_is_not():
+    """Pixels that read <= 0 in every channel at every geometry amid light are dead (a lit pixel's
+    photo-electrons never all fall to 0); dark-subtracted pixels of a dim field with read noise are not."""
+    from scatterlab.io import with_pixel_mask
+
+    ds = small(G=2, H=16, W=16)
+    counts = ds.counts.copy()
+    counts[:, :, 7:9, 7:10] = 0.0
+    ds.counts = counts
+    with pytest.warns(UserWarning, match=r"6 pixels read <= 0 .* first at row 7, column 7"):
+        dead = PolarimetricDataset(
+            counts, ds.polarizer_angles, ds.theta, ds.wavelength, ds.optics, read_noise=1.0
+        )
+    assert any("dead pixels?" in n for n in dead.notes)
+    bad = np.zeros((16, 16), bool)
+    bad[7:9, 7:10] = True
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # listed: no warning, and the note is replaced
+        listed = with_pixel_mask(dead, bad)
+    assert not any("dead pixels?" in n for n in listed.notes)
+    rng = np.random.default_rng(1)
+    noise = 30.0 + rng.normal(0, 10.0, (2, 4, 16, 16))  # dim light, under 20 x the read noise
+    noise[:, :, :4] -= 30.0  # and no light, where a pixel may read <= 0 in all eight reads
+    noise[:, :, 0, :3] = -np.abs(noise[:, :, 0, :3])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        PolarimetricDataset(
+            noise, ds.polarizer_angles, ds.theta, ds.wavelength, ds.optics, read_noise=10.0
+        )
