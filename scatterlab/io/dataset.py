@@ -78,6 +78,8 @@ NEGATIVE_SHARE = 0.1
 # the smallest share of a geometry's pixels that bad_pixels may leave to measure
 MIN_VALID_SHARE = 0.1
 LEFT_OUT_NOTE = "pixels left out of the likelihood per geometry"
+# pixels sharing a channel's highest count that mark it as clipped (saturated): a 3 x 3 plateau
+PLATEAU_PIXELS = 9
 DEAD_PIXEL_NOTE = "pixels read <= 0 in every channel at every geometry"
 _OPTICS_KEYS = {
     "pixels_per_lambda_over_d": 1.0,
@@ -476,6 +478,28 @@ def _dead_pixel_note(counts, valid, read_noise, where):
     return note
 
 
+def _saturation_note(counts, read_noise, where):
+    """A note (and a warning) when a channel's brightest value is shared by a plateau of at least
+    :data:`PLATEAU_PIXELS` pixels: clipped at the camera's full well. Light with shot noise never
+    repeats its highest count over so many pixels."""
+    G, K = counts.shape[:2]
+    top = counts.reshape(G, K, -1).max(axis=-1)
+    at_top = np.sum(counts >= top[..., None, None] * (1 - 1e-6), axis=(-2, -1))
+    flat = (at_top >= PLATEAU_PIXELS) & (top > 20.0 * max(read_noise or 0.0, 1.0))
+    if not flat.any():
+        return None
+    g, k = (int(v[0]) for v in np.nonzero(flat))
+    note = (
+        f"{int(at_top[g, k])} pixels of geometry {g}, channel {k} sit at the same highest count "
+        f"{top[g, k]:.6g} e- ({int(flat.sum())} of {G * K} images have such a plateau): saturated? "
+        "Clipped channels make a pixel's DOLP wrong (a saturated area reads as unpolarized, like a "
+        "metal). Expose so that nothing saturates; listing saturated pixels in bad_pixels is worse "
+        "when they cover much of a region (docs/characterization_accuracy.md)"
+    )
+    warnings.warn(f"{where}: {note}", UserWarning, stacklevel=3)
+    return note
+
+
 def from_flat(flat: dict, where: str) -> PolarimetricDataset:
     """Validate the flat dict of file keys and build the dataset.
 
@@ -542,9 +566,12 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
             )
         per = (~valid).sum(axis=(1, 2)).tolist()
         notes.append(f"{LEFT_OUT_NOTE}: {per} of {valid[0].size} (listed in bad_pixels)")
-    dead = _dead_pixel_note(counts, valid, read_noise and float(read_noise), where)
-    if dead:
-        notes.append(dead)
+    for note in (
+        _dead_pixel_note(counts, valid, read_noise and float(read_noise), where),
+        _saturation_note(counts, read_noise and float(read_noise), where),
+    ):
+        if note:
+            notes.append(note)
     ds = object.__new__(PolarimetricDataset)  # validated here: skip __post_init__'s round trip
     ds.__dict__.update(
         bad_pixels=bad,

@@ -404,3 +404,28 @@ def test_dead_pixels_inside_light_are_pointed_out_and_a_dark_field_is_not():
         PolarimetricDataset(
             noise, ds.polarizer_angles, ds.theta, ds.wavelength, ds.optics, read_noise=10.0
         )
+
+
+def test_a_saturated_plateau_is_pointed_out_and_shot_noise_is_not():
+    """Counts clipped at a full well share their highest value over many pixels; Poisson light with
+    read noise never does (independent truth: the clipping applied here)."""
+    rng = np.random.default_rng(3)
+    ds = small(G=2, H=32, W=32)
+    light = rng.poisson(np.clip(ds.counts, 0, None) * 50) + rng.normal(0, 10, ds.counts.shape)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        PolarimetricDataset(
+            light, ds.polarizer_angles, ds.theta, ds.wavelength, ds.optics, read_noise=10.0
+        )
+    full = np.quantile(light[1, 2], 0.9)
+    clipped = light.copy()
+    clipped[1] = np.minimum(clipped[1], full)
+    with pytest.warns(
+        UserWarning, match=r"pixels of geometry 1, channel \d sit at the same highest"
+    ):
+        sat = PolarimetricDataset(
+            clipped, ds.polarizer_angles, ds.theta, ds.wavelength, ds.optics, read_noise=10.0
+        )
+    assert any("saturated?" in n for n in sat.notes)
