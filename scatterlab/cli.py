@@ -8,7 +8,7 @@
     scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
     scatterlab analyze DATASET [--out DIR] [--force] [--psf blind|diffraction] [--iterations N]
                      [--classes adaptive|priors] [--bias-samples N] [--model-error] [--frames F]
-                     [--psf-refine none|layout] [--bad-pixels MASK.tif|.npy]
+                     [--psf-refine none|layout] [--bad-pixels MASK.tif|.npy] [--full-well E]
     scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--sigma S] [--time-convention exp(-iwt)]
     scatterlab fit-dolp FILE.csv [--out DIR] [--sigma S] [--noise N] [--angle-unit rad]
     scatterlab fit-ellipsometry FILE.csv [--out DIR] [--sigma S] [--time-convention exp(-iwt)]
@@ -223,14 +223,14 @@ def _analyze(args) -> int:
 
     def run(ex):
         dataset = args.dataset
-        if args.bad_pixels is not None:
+        if args.bad_pixels is not None or args.full_well is not None:
             from scatterlab.io import read_dataset, read_pixel_mask, with_pixel_mask
 
-            mask = read_pixel_mask(args.bad_pixels)
+            mask = None if args.bad_pixels is None else read_pixel_mask(args.bad_pixels)
             with warnings.catch_warnings():  # about pixels the mask may list: said again if not
                 warnings.simplefilter("ignore", UserWarning)
                 ds = read_dataset(dataset)
-            dataset = with_pixel_mask(ds, mask)
+            dataset = with_pixel_mask(ds, mask, full_well=args.full_well)
         return analyze(dataset, args.out, settings=settings, overwrite=args.force, executor=ex)
 
     return _report(args, run)
@@ -840,6 +840,15 @@ def main(argv=None) -> int:
         help="TIFF or .npy mask, non-zero at dead, hot or defective pixels (H x W, or one page per "
         "geometry): left out of the restoration's likelihood and unclassified; added to the "
         "dataset's own bad_pixels",
+    )
+    an.add_argument(
+        "--full-well",
+        type=float,
+        default=None,
+        metavar="E",
+        help="dark-subtracted count [e-] at which a pixel saturates: values at or above it are "
+        "censored ('at least this many') and their pixels left unclassified (replaces the "
+        "dataset's full_well_e)",
     )
     an.add_argument(
         "--sigma", type=float, default=0.3, help="known roughness (rms facet slope, default 0.3)"

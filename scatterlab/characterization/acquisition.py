@@ -94,6 +94,9 @@ class Acquisition:
         Share of the light the beam splitter sends to the two cameras together (0: none).
     read_noise : float
         Read noise per read [e- rms] (each image and its dark frame are read once).
+    full_well : float or None
+        Dark-subtracted count at which a pixel saturates [photo-electrons]: values at or above it are
+        censored in the restoration, and a pixel with such a channel has no measured DOLP.
     valid : ndarray of bool, shape (H, W), or None
         Pixels to measure with (False: dead, hot or defective; left out of the likelihood and left
         unclassified); None: all.
@@ -114,6 +117,7 @@ class Acquisition:
     diversity_share: float = 0.0
     read_noise: float = 0.0
     valid: np.ndarray | None = None
+    full_well: float | None = None
 
 
 def plate_scene(plate, labels, theta):

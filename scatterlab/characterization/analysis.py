@@ -204,6 +204,7 @@ def _acquisitions(ds, settings):
                 ts,
                 td,
                 valid=None if valid is None else valid[g],
+                full_well=getattr(ds, "full_well", None),
             )
         )
     return out
@@ -275,10 +276,16 @@ def analyze(
             "3 polarizer channels"
         )
     valid = ds.valid_pixels() if hasattr(ds, "valid_pixels") else None
-    if valid is not None and settings.psf_refine == "layout" and settings.psf == "blind":
+    censored = getattr(ds, "full_well", None) is not None
+    if (
+        (valid is not None or censored)
+        and settings.psf_refine == "layout"
+        and settings.psf == "blind"
+    ):
         raise ValueError(
-            "psf_refine='layout' (--psf-refine layout) cannot leave out the dataset's bad pixels yet "
-            "(bad_pixels, --bad-pixels): use psf_refine='none'"
+            "psf_refine='layout' (--psf-refine layout) cannot leave out the dataset's bad pixels or "
+            "censor its saturated ones yet (bad_pixels, full_well_e, --bad-pixels, --full-well): use "
+            "psf_refine='none'"
         )
     folder = RunFolder(out, overwrite)
     t0 = time.perf_counter()
@@ -325,7 +332,8 @@ def _restore_and_register(acqs, thetas, settings, folder, rng, executor):
 
 def _layout(images, thetas, settings) -> np.ndarray:
     """Metal (1) / dielectric (0) map in object coordinates (:class:`AnalyzeSettings`, ``classes``);
-    -1 where no geometry measured the pixel (bad pixels, or no light): unclassified."""
+    -1 where no geometry measured the pixel's DOLP (bad or saturated pixels, or no light):
+    unclassified."""
     from scatterlab.deconvolution import PRIOR_SETS, adaptive_priors, classify_dolp
 
     priors = PRIOR_SETS[settings.priors]
@@ -409,7 +417,44 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
         executor=executor,
         model_error=settings.model_error,
     )
+    for e in estimates:
+        warning = _unmeasured_border(e.name, layout, sel, margin)
+        if warning:
+            e.warnings.append(warning)
     return estimates, pixel_maps(stack, thetas, settings.sigma), missing
+
+
+# a region bordered by unmeasured pixels amounting to more than this share of its size gets a warning
+UNMEASURED_BORDER_SHARE = 0.1
+
+
+def _unmeasured_border(name, layout, sel, margin) -> str | None:
+    """A warning when a region borders many pixels whose DOLP nobody measured (bad or saturated),
+    counted as the unmeasured patches it touches against its own size: a saturated metal's brightest,
+    purest part is then missing from its mean, and what is left lies in halos and thin features mixed
+    with the neighbouring material."""
+    from scipy import ndimage
+
+    layout = np.asarray(layout)
+    unknown = layout < 0
+    if not unknown.any():
+        return None
+    lab = {"paint": 0, "metal": 1}[name]
+    region = layout == lab
+    size = int(np.sum(region & sel))
+    if not size:
+        return None
+    patches, _ = ndimage.label(unknown)
+    touched = np.unique(patches[ndimage.binary_dilation(region, iterations=margin) & unknown])
+    bordering = int(np.isin(patches, touched[touched > 0]).sum())
+    if bordering <= UNMEASURED_BORDER_SHARE * size:
+        return None
+    return (
+        f"it borders {bordering} unmeasured (bad or saturated) pixels, {bordering / size:.0%} of its "
+        f"own {size}: where those are its brightest, purest part (a saturated metal), its mean rests "
+        "on what is left -- edges, halos and thin features mixed with the neighbouring material -- "
+        "and can be biased beyond its interval. Expose so that it does not saturate to measure it."
+    )
 
 
 def _on_image_grid(psf, shape):
@@ -641,7 +686,7 @@ def _markdown(ds, settings, posts, seconds, missing, scored=None, unclassified=0
     if unclassified:
         notes.append(
             f"- **{unclassified} pixels are unclassified** (magenta in the regions map): no geometry "
-            "measured them (bad pixels, or no light), so they are in neither region."
+            "measured their DOLP (bad or saturated pixels, or no light), so they are in neither region."
         )
     if not settings.model_error:
         notes.append(

@@ -174,14 +174,33 @@ def degraded(acq: Acquisition, priors=None) -> Restoration:
     S = stokes_from_channels(acq.counts, acq.angles)
     dolp = signed_dolp(S)
     classes = classify_dolp(np.nan_to_num(dolp, nan=0.0), priors) if priors else None
-    return _unmeasured(Restoration("degraded", S[..., 0], dolp, classes), acq.valid)
+    return _unmeasured(Restoration("degraded", S[..., 0], dolp, classes), acq)
 
 
-def _unmeasured(rest: Restoration, valid) -> Restoration:
-    """``rest`` with its DOLP NaN and its classes -1 where ``valid`` (H, W) is False."""
+def measured_pixels(acq: Acquisition) -> np.ndarray | None:
+    """The pixels whose DOLP the acquisition measures (H, W): not bad (``acq.valid``) and with no
+    channel at the full well; None when that is all of them.
+
+    Parameters
+    ----------
+    acq : Acquisition
+
+    Returns
+    -------
+    ndarray of bool, shape (H, W), or None
+    """
+    valid = None if acq.valid is None else np.asarray(acq.valid, bool)
+    if acq.full_well is not None:
+        unsaturated = ~np.any(np.asarray(acq.counts) >= acq.full_well, axis=0)
+        valid = unsaturated if valid is None else valid & unsaturated
+    return None if valid is None or valid.all() else valid
+
+
+def _unmeasured(rest: Restoration, acq: Acquisition) -> Restoration:
+    """``rest`` with its DOLP NaN and its classes -1 where the acquisition measured no DOLP."""
+    valid = measured_pixels(acq)
     if valid is None:
         return rest
-    valid = np.asarray(valid, bool)
     rest.valid = valid
     rest.dolp = np.where(valid, rest.dolp, np.nan)
     if rest.classes is not None:
@@ -194,6 +213,8 @@ def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int
     h.update(np.ascontiguousarray(acq.angles).tobytes())
     if acq.valid is not None:
         h.update(np.packbits(np.asarray(acq.valid, bool)).tobytes())
+    if acq.full_well is not None:
+        h.update(repr(("full_well", float(acq.full_well))).encode())
     if ideal.psf or acq.d_over_r0 is None:
         h.update(np.ascontiguousarray(acq.psf_true).tobytes())
     if acq.diversity_counts is not None:  # the cameras' frames and the fit's constants
@@ -293,7 +314,9 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     radius, pad = (np.sqrt(2) * H / 2, H // 2) if known_psf else (H / 4, int(np.ceil(H / 4)))
     grid = object_grid((H, W), radius, pad=pad)
     F = settings.frames
-    kw = dict(psf_radius=radius, pad=pad, pupil=acq.pupil, frames=F, mask=acq.valid)
+    kw = dict(
+        psf_radius=radius, pad=pad, pupil=acq.pupil, frames=F, mask=acq.valid, censor=acq.full_well
+    )
     if diversity:  # the PSF phase diversity finds, then held fixed
         psf0, mode = resample_psf(phase_diversity_psf(acq), grid), "fixed"
     elif known_psf:  # one known PSF, the same for every frame
@@ -389,7 +412,7 @@ def restore(
                 rest = Restoration(
                     kind, z["s0"], z["dolp"], cls, z["psf"], z["loglik"], z["loglik_classes"]
                 )
-                return _unmeasured(rest, acq.valid)
+                return _unmeasured(rest, acq)
     s0, dolp, classes, psf, loglik, loglik_classes = _em(acq, settings, known, seed)
     if path is not None:
         from scatterlab.runtime.results import write_npz
@@ -404,4 +427,4 @@ def restore(
             loglik_classes=loglik_classes,
             classes=np.zeros(0, int) if classes is None else classes,
         )
-    return _unmeasured(Restoration(kind, s0, dolp, classes, psf, loglik, loglik_classes), acq.valid)
+    return _unmeasured(Restoration(kind, s0, dolp, classes, psf, loglik, loglik_classes), acq)

@@ -35,6 +35,11 @@ otherwise "object = point, PSF = image" maximizes the likelihood; the pupil mode
 optical band. Boundaries: Reeves's approach (Ref. 106) -- the object is estimated on a grid larger than the
 data by ``pad`` pixels on each side and only measured pixels enter the likelihood, so no wrap-around; or
 ``boundary="periodic"``. Masked pixels (``mask``, ``saturation``) leave the likelihood the same way.
+Censored values (``censor``, a full well): a channel value at or above it says only "at least this many";
+it enters the likelihood as :math:`\ln P(d \ge c)` and the E-step as :math:`E[d \mid d \ge c]` under the
+current prediction (both with the normal approximation of the Poisson law, good at full-well counts), so a
+saturated area keeps constraining its light -- which masking it would leave to guesswork, with its halo
+left on the pixels around.
 Initial guesses: the text (Sec. 5.3.2) starts from S0 = 1, P = 1/2, alpha = 0 and the PSF of a random
 Kolmogorov screen (:func:`scatterlab.deconvolution.psf_update.initial_psf`); here S0 and P start by default from
 the least-squares Stokes images of the data (``s0_start=1.0, dolp_start=0.5`` gives the text's start), the PSF
@@ -84,6 +89,8 @@ __all__ = [
     "psf_step",
     "evenly_spaced",
     "object_grid",
+    "censored_mean",
+    "censored_log_survival",
 ]
 
 
@@ -170,12 +177,15 @@ class WindowOptions:
     pad : Reeves padding [pixels]; None: the PSF radius.
     mask : bool array ``(H, W)``, optional -- pixels to use (False: saturated, dead, ...).
     saturation : float, optional [photo-electrons] -- pixels where any channel reaches it are masked too.
+    censor : float, optional [photo-electrons] -- full well: channel values at or above it are censored
+        (module docstring) instead of masked. Not with ``psf_mode="phase"``.
     """
 
     boundary: str = "reeves"
     pad: int | None = None
     mask: object = None
     saturation: float | None = None
+    censor: float | None = None
 
 
 @dataclass(frozen=True)
@@ -243,6 +253,7 @@ _KEYWORDS = {
     "pad": ("window", "pad"),
     "mask": ("window", "mask"),
     "saturation": ("window", "saturation"),
+    "censor": ("window", "censor"),
     "s0_start": ("start", "s0"),
     "dolp_start": ("start", "dolp"),
     "iterations": ("stop", "iterations"),
@@ -359,16 +370,80 @@ class _Problem:
     pupil: np.ndarray | None
     notes: list
     phase_psf: PupilPhasePSF | None = None
+    censored: np.ndarray | None = None  # (K, H, W) bool: values at or above the full well
+    ceiling: float = np.inf  # the full well [photo-electrons]
 
     @property
     def priors(self) -> tuple:
         return tuple(self.opts.polarization.priors) if self.opts.polarization.priors else ()
 
+    def data(self, i) -> np.ndarray:
+        """The data the E-step reads: the counts, with each censored value replaced by its expectation
+        ``E[d | d >= ceiling]`` under the prediction ``i`` (K, H, W)."""
+        if self.censored is None:
+            return self.d
+        return np.where(self.censored, censored_mean(i, self.ceiling), self.d)
+
     def likelihood(self, i) -> float:
-        """Poisson log-likelihood sum(d ln i - i) over the measured pixels."""
+        """Poisson log-likelihood sum(d ln i - i) over the measured pixels; a censored value
+        contributes ln P(d >= ceiling) instead."""
         # d ln i - i; where d = 0 the clipped log is finite, so the product is exactly 0
         predicted = float(np.sum(i * self.valid)) if self.ops.masked else float(i.sum())
-        return float(np.vdot(self.d, np.log(np.maximum(i, 1e-300)))) - predicted
+        L = float(np.vdot(self.d, np.log(np.maximum(i, 1e-300)))) - predicted
+        if self.censored is not None:
+            ic = i[self.censored]
+            L -= float(np.sum(self.d[self.censored] * np.log(np.maximum(ic, 1e-300)) - ic))
+            L += float(np.sum(censored_log_survival(ic, self.ceiling)))
+        return L
+
+
+def _standardised(i, c):
+    """``(c - i) / sigma`` with the Poisson sigma ``sqrt(i)`` (at least 1 count)."""
+    sigma = np.sqrt(np.maximum(i, 1.0))
+    return (c - i) / sigma, sigma
+
+
+def censored_mean(i, c) -> np.ndarray:
+    """``E[d | d >= c]`` for counts of mean ``i`` (normal approximation of the Poisson law).
+
+    Parameters
+    ----------
+    i : array_like [photo-electrons] -- expected counts.
+    c : float [photo-electrons] -- the censoring level (full well).
+
+    Returns
+    -------
+    ndarray
+        ``i + sigma phi(a) / Q(a)``, ``a = (c - i) / sigma``, ``sigma = sqrt(i)``: at least ``c``, and
+        ``i`` when ``i >> c`` (computed with ``erfcx``, finite for any ``a``).
+    """
+    from scipy.special import erfcx
+
+    i = np.asarray(i, float)
+    a, sigma = _standardised(i, c)
+    # phi(a) / Q(a) = sqrt(2 / pi) / erfcx(a / sqrt 2)
+    return np.maximum(i + sigma * np.sqrt(2.0 / np.pi) / erfcx(a / np.sqrt(2.0)), c)
+
+
+def censored_log_survival(i, c) -> np.ndarray:
+    """``ln P(d >= c)`` for counts of mean ``i`` (normal approximation, finite for any ``i``).
+
+    Parameters
+    ----------
+    i : array_like [photo-electrons]; c : float [photo-electrons]
+
+    Returns
+    -------
+    ndarray
+        ``ln Q(a) = ln(erfcx(a / sqrt 2) / 2) - a^2 / 2`` for ``a >= 0``, ``ln(1 - erfc(-a / sqrt 2) / 2)``
+        below.
+    """
+    from scipy.special import erfc, erfcx
+
+    a, _ = _standardised(np.asarray(i, float), c)
+    upper = np.log(erfcx(np.maximum(a, 0.0) / np.sqrt(2.0)) / 2.0) - np.maximum(a, 0.0) ** 2 / 2
+    lower = np.log1p(-erfc(-np.minimum(a, 0.0) / np.sqrt(2.0)) / 2.0)
+    return np.where(a >= 0, upper, lower)
 
 
 @dataclass
@@ -419,6 +494,11 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
         raise ValueError(f"psf_mode must be 'em', 'pupil', 'phase' or 'fixed', got {mode!r}")
     if opts.window.boundary not in ("reeves", "periodic"):
         raise ValueError(f"boundary must be 'reeves' or 'periodic', got {opts.window.boundary!r}")
+    if opts.window.censor is not None and mode == "phase":
+        raise ValueError(
+            "censor (a full well) works with psf_mode 'em', 'pupil' or 'fixed', not 'phase' (its "
+            "likelihood has no censored term)"
+        )
     if np.any(np.abs(th) > 2 * np.pi):
         raise ValueError(
             f"angles must be polarizer angles in radians, got values up to {np.abs(th).max():g} "
@@ -482,7 +562,8 @@ def _check_start_and_stop(opts: EMOptions) -> None:
 
 
 def _valid_pixels(d, window: WindowOptions, notes):
-    """Clip the data at 0 and mask it; return (data, valid (H, W) bool)."""
+    """Clip the data at 0 and mask it; return (data, valid (H, W) bool, censored (K, H, W) bool or
+    None)."""
     d = np.clip(d, 0.0, None)
     if not d.sum() > 0:
         raise ValueError("data holds no photons (every count is <= 0): nothing to deconvolve")
@@ -505,7 +586,22 @@ def _valid_pixels(d, window: WindowOptions, notes):
             f"{int((~valid).sum())} masked pixels (saturated or excluded) left out of the likelihood"
         )
         d = d * valid
-    return d, valid
+    censored = None
+    if window.censor is not None:
+        c = window.censor
+        if not (isinstance(c, (int, float, np.floating)) and np.isfinite(c) and c > 0):
+            raise ValueError(
+                f"censor (the full well) must be a number > 0 photo-electrons, got {c!r}"
+            )
+        censored = (d >= c) & valid
+        if censored.any():
+            notes.append(
+                f"{int(censored.sum())} channel values at or above the full well {c:g} e- censored "
+                "(they count as 'at least this many')"
+            )
+        else:
+            censored = None
+    return d, valid, censored
 
 
 def _initial_psfs(psf0, pupil, ops: _Ops, support, radius, nps):
@@ -580,7 +676,7 @@ def _setup(data, angles, psf0, pupil, opts: EMOptions):
             "polarizer angles are not evenly spaced: the S0/DOLP updates are generalised-EM steps "
             "(coupled updates of Sec. 3.3.2)"
         )
-    d, valid = _valid_pixels(d, opts.window, notes)
+    d, valid, censored = _valid_pixels(d, opts.window, notes)
     H, W = d.shape[1:]
     radius = min(H, W) / 4 if opts.psf.radius is None else opts.psf.radius
     pad = opts.window.pad
@@ -617,6 +713,8 @@ def _setup(data, angles, psf0, pupil, opts: EMOptions):
             f"PSF(s) {empty.tolist()} saw no photons (lost exposures): they keep their start"
         )
     problem = _Problem(d, th, valid, ops, support, D, group, model, opts, pupil, notes, phase_psf)
+    if censored is not None:
+        problem.censored, problem.ceiling = censored, float(opts.window.censor)
     pred = model.forward(h, s0, P)
     state = EMState(h, s0, P, pred, ops.window_share(pred.Hf), pupil_phase)
     state.loglik.append(problem.likelihood(pred.i))
@@ -638,7 +736,7 @@ def e_step(problem: _Problem, state: EMState):
     Pp : ``(K, Hp, Wp)`` per-channel polarized part (None on the Stokes fast path); R : ratio spectra
     """
     i = state.pred.i
-    r = np.divide(problem.d, i, out=np.zeros_like(problem.d), where=(i > 0) & problem.valid)
+    r = np.divide(problem.data(i), i, out=np.zeros_like(problem.d), where=(i > 0) & problem.valid)
     return problem.model.estep(state.pred, r, state.s0, state.P)
 
 
@@ -800,9 +898,9 @@ def blind_deconvolve(
     The options come grouped in ``options`` (:class:`EMOptions`) or as the flat keywords of earlier
     versions, applied on top of ``options``: ``psf_mode``, ``shared_psf``, ``psf_radius``, ``gs_steps``
     (:class:`PSFOptions`); ``aop``, ``estimate_aop``, ``priors``, ``prior_weight``
-    (:class:`PolarizationOptions`); ``boundary``, ``pad``, ``mask``, ``saturation`` (:class:`WindowOptions`);
-    ``s0_start``, ``dolp_start`` (:class:`StartOptions`); ``iterations``, ``tol``, ``callback``
-    (:class:`StopOptions`);
+    (:class:`PolarizationOptions`); ``boundary``, ``pad``, ``mask``, ``saturation``, ``censor``
+    (:class:`WindowOptions`); ``s0_start``, ``dolp_start`` (:class:`StartOptions`); ``iterations``, ``tol``,
+    ``callback`` (:class:`StopOptions`);
     ``update_object``. Each iteration is :func:`e_step`, :func:`m_step`, :func:`psf_step` on an
     :class:`EMState`.
 

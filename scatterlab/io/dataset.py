@@ -14,10 +14,13 @@ from measured (or simulated) data:
   pixel pitch and focal length;
 * ``read_noise`` [e- rms] or None when unknown;
 * ``bad_pixels`` (G, H, W) bool or None: pixels to leave out (dead, hot, defective). They do not
-  enter the likelihood of the restoration, and the analysis leaves them unclassified. Saturated
-  pixels are better kept than listed when they cover much of a region: dropping them leaves the
-  restoration guessing that region's light, which then stays in its neighbours' halo (measured on
-  the simulated example in ``docs/characterization_accuracy.md``);
+  enter the likelihood of the restoration, and the analysis leaves them unclassified;
+* ``full_well`` [e-] or None: the dark-subtracted count at which a pixel saturates. Values at or above
+  it are censored: they tell the restoration "at least this many" (a saturated area still holds its
+  light, and its halo is taken off the pixels around), and a pixel with a saturated channel has no
+  measured DOLP, so the analysis leaves it unclassified. Saturated pixels are better given this way
+  than listed in ``bad_pixels``: dropped, their light is left to guesswork and its halo stays on the
+  pixels around (``docs/characterization_accuracy.md``);
 * ``truth`` (:class:`Truth`) or None: what a simulation knows (labels, indices, roughness, the
   object's S0 and DOLP, the PSFs); None for measurements;
 * ``title``, ``description`` (str) and ``simulated`` (bool, True for simulated data, always said so
@@ -42,7 +45,9 @@ Files (all hold the same keys; degrees and micrometres in files, radians and met
 ``pixels_per_lambda_over_d``, ``aperture_diameter_mm``, ``pixel_pitch_um``, ``focal_length_mm``
 (optics; give the first or the other three); ``read_noise_e``; ``bad_pixels`` ((H, W) for the
 sensor, or (G, H, W) per geometry, non-zero = bad; for DoFP data (2H, 2W) or (G, 2H, 2W) on the raw
-frame, a superpixel being bad when any of its four pixels is); ``title``; ``description``;
+frame, a superpixel being bad when any of its four pixels is); ``full_well_e`` (give the camera's
+full well less the dark level, or a little below: pixels at or above it in a channel are
+saturated); ``title``; ``description``;
 ``simulated``; ``truth_labels`` (H, W), ``truth_names`` (L,), ``truth_n``, ``truth_kappa``,
 ``truth_sigma`` (L,), ``truth_s0``, ``truth_dolp``, ``truth_psf`` (G, H, W).
 """
@@ -81,6 +86,8 @@ LEFT_OUT_NOTE = "pixels left out of the likelihood per geometry"
 # pixels sharing a channel's highest count that mark it as clipped (saturated): a 3 x 3 plateau
 PLATEAU_PIXELS = 9
 DEAD_PIXEL_NOTE = "pixels read <= 0 in every channel at every geometry"
+SATURATED_NOTE = "pixels with a channel at the full well"
+PLATEAU_NOTE = "sit at the same highest count"
 _OPTICS_KEYS = {
     "pixels_per_lambda_over_d": 1.0,
     "aperture_diameter_mm": 1e-3,
@@ -194,6 +201,7 @@ class PolarimetricDataset:
     source: str = ""
     notes: list = field(default_factory=list)
     bad_pixels: np.ndarray | None = None
+    full_well: float | None = None
 
     def __post_init__(self):
         flat = to_flat(self)
@@ -208,7 +216,8 @@ class PolarimetricDataset:
         self.notes = list(self.notes) + [n for n in checked.notes if n not in self.notes]
 
     def valid_pixels(self) -> np.ndarray | None:
-        """The pixels to measure with at each geometry: those not in ``bad_pixels``.
+        """The pixels to measure with at each geometry: those not in ``bad_pixels`` (saturated ones
+        are measured, censored: :attr:`full_well`).
 
         Returns
         -------
@@ -277,6 +286,8 @@ def to_flat(ds: PolarimetricDataset, *, dofp_pattern=None) -> dict:
         if dofp_pattern is not None:  # on the raw frame: each superpixel's four pixels
             bad = np.repeat(np.repeat(bad, 2, axis=-2), 2, axis=-1)
         flat["bad_pixels"] = bad.astype(np.uint8)
+    if getattr(ds, "full_well", None) is not None:
+        flat["full_well_e"] = float(ds.full_well)
     t = ds.truth
     if t is not None:
         flat.update(
@@ -490,14 +501,25 @@ def _saturation_note(counts, read_noise, where):
         return None
     g, k = (int(v[0]) for v in np.nonzero(flat))
     note = (
-        f"{int(at_top[g, k])} pixels of geometry {g}, channel {k} sit at the same highest count "
+        f"{int(at_top[g, k])} pixels of geometry {g}, channel {k} {PLATEAU_NOTE} "
         f"{top[g, k]:.6g} e- ({int(flat.sum())} of {G * K} images have such a plateau): saturated? "
         "Clipped channels make a pixel's DOLP wrong (a saturated area reads as unpolarized, like a "
-        "metal). Expose so that nothing saturates; listing saturated pixels in bad_pixels is worse "
-        "when they cover much of a region (docs/characterization_accuracy.md)"
+        "metal). Give the full well (full_well_e, or analyze --full-well), which censors them; "
+        "listing them in bad_pixels is worse (docs/characterization_accuracy.md)"
     )
     warnings.warn(f"{where}: {note}", UserWarning, stacklevel=3)
     return note
+
+
+def _saturated_note(counts, full_well):
+    """What the full well censors: the saturated pixels per geometry."""
+    per = np.any(counts >= full_well, axis=1).sum(axis=(1, 2)).tolist()
+    if not any(per):
+        return None
+    return (
+        f"{SATURATED_NOTE} (full_well_e = {full_well:g} e-) per geometry: {per} of "
+        f"{counts[0, 0].size}; censored in the restoration, unclassified"
+    )
 
 
 def from_flat(flat: dict, where: str) -> PolarimetricDataset:
@@ -555,6 +577,7 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
         raise ValueError(f"{where}: 'read_noise_e' must be >= 0, got {read_noise}")
     bad = _bad_pixels(flat, counts.shape, where)
     valid = _valid(counts, bad)
+    full_well = _scalar(flat, "full_well_e", where, required=False)
     if valid is not None:
         share = valid.mean(axis=(1, 2))
         if np.any(share < MIN_VALID_SHARE):
@@ -568,13 +591,16 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
         notes.append(f"{LEFT_OUT_NOTE}: {per} of {valid[0].size} (listed in bad_pixels)")
     for note in (
         _dead_pixel_note(counts, valid, read_noise and float(read_noise), where),
-        _saturation_note(counts, read_noise and float(read_noise), where),
+        _saturation_note(counts, read_noise and float(read_noise), where)
+        if full_well is None
+        else _saturated_note(counts, full_well),
     ):
         if note:
             notes.append(note)
     ds = object.__new__(PolarimetricDataset)  # validated here: skip __post_init__'s round trip
     ds.__dict__.update(
         bad_pixels=bad,
+        full_well=full_well,
         counts=counts,
         polarizer_angles=angles,
         theta=np.radians(theta_deg),
@@ -608,6 +634,7 @@ _KEYS = {
     "wavelength_um",
     "read_noise_e",
     "bad_pixels",
+    "full_well_e",
     *_OPTICS_KEYS,
     *_TRUTH_KEYS,
 }
@@ -726,29 +753,37 @@ def write_dataset(
     return writers[suffix](path, ds, dofp_pattern=dofp_pattern, overwrite=overwrite)
 
 
-def with_pixel_mask(ds: PolarimetricDataset, bad_pixels) -> PolarimetricDataset:
-    """``ds`` with ``bad_pixels`` added to its own (``scatterlab analyze --bad-pixels FILE``).
+def with_pixel_mask(
+    ds: PolarimetricDataset, bad_pixels=None, *, full_well: float | None = None
+) -> PolarimetricDataset:
+    """``ds`` with ``bad_pixels`` added to its own and ``full_well`` replacing its own
+    (``scatterlab analyze --bad-pixels FILE --full-well E``).
 
     Parameters
     ----------
     ds : PolarimetricDataset
-    bad_pixels : array_like (H, W) or (G, H, W)
+    bad_pixels : array_like (H, W) or (G, H, W), optional
         Non-zero where a pixel is bad (dead, hot, defective).
+    full_well : float, optional [e-]
+        Dark-subtracted count at which a pixel saturates (values at or above it are censored).
 
     Returns
     -------
     PolarimetricDataset
-        Validated as a file's keys are (ValueError naming ``bad_pixels``).
+        Validated as a file's keys are (ValueError naming ``bad_pixels`` or ``full_well_e``).
     """
     flat = to_flat(ds)
     G, _, H, W = ds.counts.shape
-    extra = _bad_pixels({"bad_pixels": bad_pixels}, ds.counts.shape, "bad_pixels")
-    own = flat.get("bad_pixels")
-    own = np.zeros((G, H, W), bool) if own is None else np.broadcast_to(own != 0, (G, H, W))
-    flat["bad_pixels"] = (extra | own).astype(np.uint8)
+    if bad_pixels is not None:
+        extra = _bad_pixels({"bad_pixels": bad_pixels}, ds.counts.shape, "bad_pixels")
+        own = flat.get("bad_pixels")
+        own = np.zeros((G, H, W), bool) if own is None else np.broadcast_to(own != 0, (G, H, W))
+        flat["bad_pixels"] = (extra | own).astype(np.uint8)
+    if full_well is not None:
+        flat["full_well_e"] = full_well
     out = from_flat(flat, ds.source or "dataset")
     # keep the notes of the reading (e.g. the DoFP demosaicing), not those the new mask replaces
-    own_notes = (DEAD_PIXEL_NOTE, LEFT_OUT_NOTE)
+    own_notes = (DEAD_PIXEL_NOTE, LEFT_OUT_NOTE, SATURATED_NOTE, PLATEAU_NOTE)
     out.notes = [
         n for n in ds.notes if not any(o in n for o in own_notes) and n not in out.notes
     ] + out.notes

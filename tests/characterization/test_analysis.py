@@ -255,3 +255,28 @@ def test_analyze_cli_takes_a_bad_pixel_mask(tmp_path, capsys):
             == 2
         )
         assert re.search(message, capsys.readouterr().err)
+
+
+def test_analyze_cli_censors_saturated_pixels_given_the_full_well(tmp_path, capsys):
+    """The example clipped at a full well: without it the reader points out the plateau; with
+    ``--full-well`` the saturated values are censored, their pixels left unclassified and counted in
+    the report."""
+    from scatterlab.io import read_dataset, write_dataset
+    from scatterlab.io.dataset import from_flat, to_flat
+
+    flat = to_flat(read_dataset(EXAMPLES / "painted_plate.h5"))
+    full = 0.8 * float(flat["counts"].max())
+    flat["counts"] = np.minimum(flat["counts"], full)
+    with pytest.warns(UserWarning, match="saturated"):
+        clipped = write_dataset(tmp_path / "clipped.npz", from_flat(flat, "clipped"))
+    args = ["--iterations", "4", "--posterior-steps", "200", "--full-well", f"{full:.6g}"]
+    out = tmp_path / "c"
+    assert main(["analyze", str(clipped), "--out", str(out), *args]) == 0
+    assert "saturated?" not in capsys.readouterr().err
+    text = (out / "report.md").read_text()
+    assert "pixels with a channel at the full well" in text and "pixels are unclassified" in text
+    s = json.loads((out / "summary.json").read_text())
+    assert s["unclassified_pixels"] > 0
+    bad = ["--full-well", "-3"]
+    assert main(["analyze", str(clipped), "--out", str(tmp_path / "x"), *bad]) == 2
+    assert "'full_well_e' must be > 0" in capsys.readouterr().err

@@ -333,9 +333,12 @@ def test_bad_pixels_round_trip_in_every_format(tmp_path):
     valid = masked.valid_pixels()
     assert valid.shape == (2, 6, 8) and np.array_equal(valid, np.broadcast_to(~bad, (2, 6, 8)))
     assert any("left out of the likelihood per geometry: [2, 2]" in n for n in masked.notes)
+    full = float(ds.counts.max())
+    masked = with_pixel_mask(masked, full_well=full)
     for suffix in (".h5", ".npz", ".tif"):
         back = read_dataset(write_dataset(tmp_path / f"m{suffix}", masked))
         assert np.array_equal(back.valid_pixels(), valid), suffix
+        assert back.full_well == full
     assert (tmp_path / "m-bad_pixels.tif").exists()
     per_geometry = np.zeros((2, 6, 8), bool)
     per_geometry[1, 0, 0] = True
@@ -366,6 +369,8 @@ def test_bad_pixels_on_a_dofp_raw_frame_mark_their_superpixel(tmp_path):
         ({"bad_pixels": np.full((6, 8), np.nan)}, "'bad_pixels' contains NaN"),
         ({"bad_pixels": np.ones((6, 8))}, r"leaves 0.0% of the pixels at geometry 0"),
         ({"bad_pixel": np.zeros((6, 8))}, r"did you mean 'bad_pixels'"),
+        ({"full_well_e": np.array(-5.0)}, "'full_well_e' must be > 0"),
+        ({"full_well": np.array(9e4)}, r"did you mean 'full_well_e'"),
     ],
 )
 def test_bad_pixel_keys_name_the_problem(tmp_path, changes, message):
@@ -429,3 +434,12 @@ def test_a_saturated_plateau_is_pointed_out_and_shot_noise_is_not():
             clipped, ds.polarizer_angles, ds.theta, ds.wavelength, ds.optics, read_noise=10.0
         )
     assert any("saturated?" in n for n in sat.notes)
+    # given the full well, the plateau is censored and counted, not questioned
+    from scatterlab.io import with_pixel_mask
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        given = with_pixel_mask(sat, full_well=full)
+    assert not any("saturated?" in n for n in given.notes)
+    n_sat = int(np.any(clipped[1] >= full, axis=0).sum())
+    assert any(f"per geometry: [0, {n_sat}]" in n for n in given.notes), given.notes
