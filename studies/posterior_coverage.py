@@ -15,7 +15,8 @@ In full mode the same data are also sampled with the naive independent noise of 
 show what ignoring the correlation costs.
 
 Full-mode run time (24 Nov 2026): not finished in 900 s serial on the shared 2-core machine (load
-average 1-2.3; stopped). Quick mode takes 45 s for 8 trials per case; full mode runs 200 per case,
+average 1-2.3; stopped). Quick mode runs 6 trials per case, about 40 s on 2 idle cores (8 trials took 54 s
+on 27 Nov 2026, too near the minute a quick mode may take); full mode runs 200 per case,
 with chains run until converged, plus the naive re-run of the correlated case: about 25-30 minutes
 serial by that scaling (use ``--workers 2``).
 """
@@ -85,7 +86,7 @@ def sample(ctx, y, kw):
 
 
 def run(ctx):
-    trials = 8 if ctx.quick else 200
+    trials = 6 if ctx.quick else 200
     pyplot = plt()
     fig, axes = pyplot.subplots(1, len(CASES), figsize=(15, 4.2))
     se = np.sqrt(LEVELS * (1 - LEVELS) / trials)
