@@ -20,6 +20,7 @@ given by ``--scheduler ADDRESS``.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import warnings
 
@@ -220,6 +221,13 @@ def _analyze(args) -> int:
         frames=args.frames,
         psf_refine=args.psf_refine,
     )
+
+    if args.full_well is not None and not (math.isfinite(args.full_well) and args.full_well > 0):
+        print(
+            f"scatterlab: --full-well must be a count > 0 photo-electrons, got {args.full_well}",
+            file=sys.stderr,
+        )
+        return 2
 
     def run(ex):
         dataset = args.dataset

@@ -332,8 +332,8 @@ def _restore_and_register(acqs, thetas, settings, folder, rng, executor):
 
 def _layout(images, thetas, settings) -> np.ndarray:
     """Metal (1) / dielectric (0) map in object coordinates (:class:`AnalyzeSettings`, ``classes``);
-    -1 where no geometry measured the pixel's DOLP (bad or saturated pixels, or no light):
-    unclassified."""
+    -1 where no geometry measured the pixel's DOLP (bad or saturated pixels, or no light; with
+    ``classes="priors"``, where the geometry nearest 50 deg did not): unclassified."""
     from scatterlab.deconvolution import PRIOR_SETS, adaptive_priors, classify_dolp
 
     priors = PRIOR_SETS[settings.priors]
@@ -401,6 +401,7 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
             margin,
             blind=blind,
             executor=executor,
+            scored=layout,
         )
         for _ in range(samples)
     ]
@@ -417,8 +418,9 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
         executor=executor,
         model_error=settings.model_error,
     )
-    for e in estimates:
-        warning = _unmeasured_border(e.name, layout, sel, margin)
+    masked = ds.valid_pixels() is not None or getattr(ds, "full_well", None) is not None
+    for e in estimates if masked else ():  # only bad or saturated pixels make a region's hole
+        warning = _unmeasured_border(e.name, layout, stack, thetas, sel, margin)
         if warning:
             e.warnings.append(warning)
     return estimates, pixel_maps(stack, thetas, settings.sigma), missing
@@ -428,32 +430,38 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
 UNMEASURED_BORDER_SHARE = 0.1
 
 
-def _unmeasured_border(name, layout, sel, margin) -> str | None:
-    """A warning when a region borders many pixels whose DOLP nobody measured (bad or saturated),
-    counted as the unmeasured patches it touches against its own size: a saturated metal's brightest,
-    purest part is then missing from its mean, and what is left lies in halos and thin features mixed
-    with the neighbouring material."""
+def _unmeasured_border(name, layout, stack, thetas, sel, margin) -> str | None:
+    """A warning when, at some geometry, a region borders or contains many pixels whose DOLP nobody
+    measured there (bad or saturated; NaN in ``stack`` (M, H, W)), counted as the unmeasured patches it
+    touches against its own size: a saturated metal's brightest, purest part is then missing from its
+    mean at that geometry, and what is left lies in halos and thin features mixed with the
+    neighbouring material."""
     from scipy import ndimage
 
     layout = np.asarray(layout)
-    unknown = layout < 0
-    if not unknown.any():
-        return None
     lab = {"paint": 0, "metal": 1}[name]
     region = layout == lab
     size = int(np.sum(region & sel))
     if not size:
         return None
-    patches, _ = ndimage.label(unknown)
-    touched = np.unique(patches[ndimage.binary_dilation(region, iterations=margin) & unknown])
-    bordering = int(np.isin(patches, touched[touched > 0]).sum())
+    reach = ndimage.binary_dilation(region, iterations=margin)
+    worst = (0, 0)
+    for g, dolp in enumerate(stack):
+        unknown = ~np.isfinite(dolp) | (layout < 0)
+        if not unknown.any():
+            continue
+        patches, _ = ndimage.label(unknown)
+        touched = np.unique(patches[reach & unknown])
+        worst = max(worst, (int(np.isin(patches, touched[touched > 0]).sum()), g))
+    bordering, g = worst
     if bordering <= UNMEASURED_BORDER_SHARE * size:
         return None
     return (
-        f"it borders {bordering} unmeasured (bad or saturated) pixels, {bordering / size:.0%} of its "
-        f"own {size}: where those are its brightest, purest part (a saturated metal), its mean rests "
-        "on what is left -- edges, halos and thin features mixed with the neighbouring material -- "
-        "and can be biased beyond its interval. Expose so that it does not saturate to measure it."
+        f"at {np.degrees(thetas[g]):.0f} deg it borders or contains {bordering} unmeasured (bad or "
+        f"saturated) pixels, {bordering / size:.0%} of its own {size}: where those are its brightest, "
+        "purest part (a saturated metal), its mean rests on what is left -- edges, halos and thin "
+        "features mixed with the neighbouring material -- and can be biased beyond its interval. "
+        "Expose so that it does not saturate to measure it."
     )
 
 

@@ -256,6 +256,7 @@ def restoration_bias(
     replicates=None,
     plate=None,
     executor=None,
+    scored=None,
 ) -> dict:
     """Re-simulated bias of each region's mean DOLP per geometry (module docstring).
 
@@ -294,6 +295,10 @@ def restoration_bias(
         diluted DOLP misleads (module docstring). With two or more replicates a paint's ratio correction
         is then :attr:`BiasEstimate.measured`.
     executor : optional
+    scored : ndarray of int, shape (H, W), optional
+        The layout the data's regions were scored on, -1 where they left pixels out (unmeasured):
+        the re-simulations' regions leave out the same pixels, so the bias is measured on the pixels
+        the data's means use. None: all of ``class_map``.
 
     Returns
     -------
@@ -317,6 +322,7 @@ def restoration_bias(
     if R < 1:
         raise ValueError(f"replicates must be >= 1, got {replicates!r}")
     labels = (np.asarray(class_map) > 0).astype(int)
+    score = labels if scored is None else np.where(np.asarray(scored) < 0, -1, labels)
     ex = executor if executor is not None else get_executor("serial")
     reference = plate is not None
     bias, current = {}, list(regions)
@@ -332,7 +338,7 @@ def restoration_bias(
         ]
         out = ex.map(_resimulate_task, tasks, desc="self-calibration")
         bias = _bias_from_replicates(
-            regions, out, labels, interior, margin, thetas, R, bootstrap, known_psf=not blind
+            regions, out, score, interior, margin, thetas, R, bootstrap, known_psf=not blind
         )
         current = [bias_corrected(r, bias[r.name]) for r in regions]
     if bootstrap and reference and R > 1:

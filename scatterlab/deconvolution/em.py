@@ -63,6 +63,7 @@ already fit three channel values) and the AOP can drift with the iterations (stu
 
 from __future__ import annotations
 
+import numbers
 import time
 from dataclasses import dataclass, field, fields, replace
 
@@ -589,7 +590,8 @@ def _valid_pixels(d, window: WindowOptions, notes):
     censored = None
     if window.censor is not None:
         c = window.censor
-        if not (isinstance(c, (int, float, np.floating)) and np.isfinite(c) and c > 0):
+        real = isinstance(c, numbers.Real) and not isinstance(c, (bool, np.bool_))
+        if not (real and np.isfinite(c) and c > 0):
             raise ValueError(
                 f"censor (the full well) must be a number > 0 photo-electrons, got {c!r}"
             )

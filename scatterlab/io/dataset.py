@@ -212,7 +212,7 @@ class PolarimetricDataset:
             checked.theta,
         )
         self.wavelength = checked.wavelength
-        self.bad_pixels = checked.bad_pixels
+        self.bad_pixels, self.full_well = checked.bad_pixels, checked.full_well
         self.notes = list(self.notes) + [n for n in checked.notes if n not in self.notes]
 
     def valid_pixels(self) -> np.ndarray | None:
@@ -430,24 +430,25 @@ def _truth(flat, counts_shape, where):
     return Truth(labels.astype(int), names, *props, **maps)
 
 
-def _bad_pixels(flat, counts_shape, where):
+def _bad_pixels(flat, counts_shape, where, raw_frame=None):
     """``bad_pixels`` as a (G, H, W) bool array (None without the key): (H, W) or (G, H, W), or the
-    same on the DoFP raw frame (2H, 2W), where a superpixel is bad when any of its pixels is."""
+    same on the DoFP raw frame (2H, 2W), where a superpixel is bad when any of its pixels is
+    (``raw_frame``: accept that shape; default: when the file holds raw frames)."""
     if "bad_pixels" not in flat:
         return None
     G, _, H, W = counts_shape
+    raw_frame = "raw" in flat if raw_frame is None else raw_frame
     a = _array(flat, "bad_pixels", where, np.ndim(flat["bad_pixels"]))
-    if "raw" in flat and a.shape[-2:] == (2 * H, 2 * W) and a.ndim in (2, 3):
+    given = a.shape
+    if raw_frame and a.shape[-2:] == (2 * H, 2 * W) and a.ndim in (2, 3):
         a = a.reshape(a.shape[:-2] + (H, 2, W, 2)).any(axis=(-3, -1))
-    if a.ndim == 2:
-        a = np.broadcast_to(a, (G,) + a.shape)
-    if a.shape != (G, H, W):
-        raw = f" (or {(2 * H, 2 * W)} on the raw frame)" if "raw" in flat else ""
+    if a.shape not in ((H, W), (G, H, W)):
+        raw = f" (or {(2 * H, 2 * W)} on the raw frame)" if raw_frame else ""
         raise ValueError(
             f"{where}: 'bad_pixels' must have shape (H, W) = {(H, W)} or (G, H, W) = "
-            f"{(G, H, W)}{raw}, got {a.shape}"
+            f"{(G, H, W)}{raw}, got {given}"
         )
-    return a != 0
+    return np.broadcast_to(a != 0, (G, H, W))
 
 
 def _valid(counts, bad):
@@ -490,13 +491,24 @@ def _dead_pixel_note(counts, valid, read_noise, where):
 
 
 def _saturation_note(counts, read_noise, where):
-    """A note (and a warning) when a channel's brightest value is shared by a plateau of at least
-    :data:`PLATEAU_PIXELS` pixels: clipped at the camera's full well. Light with shot noise never
-    repeats its highest count over so many pixels."""
+    """A note (and a warning) when at least :data:`PLATEAU_PIXELS` pixels of a channel lie within six
+    read-noise sigma of its brightest value, three times as many as in the band just below: clipped at
+    the camera's full well (and spread by the dark frame subtracted). Light with shot noise never
+    crowds its highest counts so closely."""
     G, K = counts.shape[:2]
     top = counts.reshape(G, K, -1).max(axis=-1)
-    at_top = np.sum(counts >= top[..., None, None] * (1 - 1e-6), axis=(-2, -1))
-    flat = (at_top >= PLATEAU_PIXELS) & (top > 20.0 * max(read_noise or 0.0, 1.0))
+    # clipped raw values, less a dark frame, spread by the dark's scatter (about the read noise)
+    tol = 6.0 * max(read_noise or 0.0, 1.0)
+    t = top[..., None, None]
+    at_top = np.sum(counts >= t - tol, axis=(-2, -1))
+    # a clip piles the light up in a spike; smooth light (noise-free synthetic data) fills the band
+    # below its top as densely as the top itself
+    below = np.sum((counts >= t - 2 * tol) & (counts < t - tol), axis=(-2, -1))
+    flat = (
+        (at_top >= PLATEAU_PIXELS)
+        & (at_top >= 3 * below)
+        & (top > 20.0 * max(read_noise or 0.0, 1.0))
+    )
     if not flat.any():
         return None
     g, k = (int(v[0]) for v in np.nonzero(flat))
@@ -775,7 +787,8 @@ def with_pixel_mask(
     flat = to_flat(ds)
     G, _, H, W = ds.counts.shape
     if bad_pixels is not None:
-        extra = _bad_pixels({"bad_pixels": bad_pixels}, ds.counts.shape, "bad_pixels")
+        # a sensor mask of a DoFP camera may come on its raw frame (2H, 2W)
+        extra = _bad_pixels({"bad_pixels": bad_pixels}, ds.counts.shape, "bad_pixels", True)
         own = flat.get("bad_pixels")
         own = np.zeros((G, H, W), bool) if own is None else np.broadcast_to(own != 0, (G, H, W))
         flat["bad_pixels"] = (extra | own).astype(np.uint8)

@@ -279,4 +279,4 @@ def test_analyze_cli_censors_saturated_pixels_given_the_full_well(tmp_path, caps
     assert s["unclassified_pixels"] > 0
     bad = ["--full-well", "-3"]
     assert main(["analyze", str(clipped), "--out", str(tmp_path / "x"), *bad]) == 2
-    assert "'full_well_e' must be > 0" in capsys.readouterr().err
+    assert "--full-well must be a count > 0" in capsys.readouterr().err

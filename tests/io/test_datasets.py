@@ -384,7 +384,8 @@ def test_dead_pixels_inside_light_are_pointed_out_and_a_dark_field_is_not():
     from scatterlab.io import with_pixel_mask
 
     ds = small(G=2, H=16, W=16)
-    counts = ds.counts.copy()
+    # light with shot noise (noise-free synthetic channels would crowd their highest count)
+    counts = np.random.default_rng(2).poisson(20 * np.clip(ds.counts, 0, None)).astype(float)
     counts[:, :, 7:9, 7:10] = 0.0
     ds.counts = counts
     with pytest.warns(UserWarning, match=r"6 pixels read <= 0 .* first at row 7, column 7"):
@@ -443,3 +444,36 @@ def test_a_saturated_plateau_is_pointed_out_and_shot_noise_is_not():
     assert not any("saturated?" in n for n in given.notes)
     n_sat = int(np.any(clipped[1] >= full, axis=0).sum())
     assert any(f"per geometry: [0, {n_sat}]" in n for n in given.notes), given.notes
+
+
+def test_review_cases_of_bad_pixels_and_saturation():
+    """A DoFP camera's raw-frame mask through with_pixel_mask; a wrong mask named by the shape given;
+    a dark-subtracted clipped plateau (spread by the dark's scatter) still pointed out."""
+    import warnings
+
+    from scatterlab.io import with_pixel_mask
+
+    ds = small(G=2, H=8, W=8)
+    raw = np.zeros((16, 16), bool)
+    raw[3, 4] = True  # superpixel (1, 2)
+    valid = with_pixel_mask(ds, raw).valid_pixels()
+    assert np.array_equal(np.argwhere(~valid[0]), [[1, 2]])
+    with pytest.raises(ValueError, match=r"got \(5, 8\)"):
+        with_pixel_mask(ds, np.zeros((5, 8)))
+    rng = np.random.default_rng(0)
+    light = rng.poisson(np.full((2, 4, 32, 32), 5e4)).astype(float)
+    dark = 100 + rng.normal(0, 3, (32, 32))
+    clipped = np.minimum(light, 3e4 + 100) - dark  # raw clipped, then the dark subtracted
+    with pytest.warns(UserWarning, match="sit at the same highest"):
+        PolarimetricDataset(
+            clipped, ds.polarizer_angles, ds.theta, ds.wavelength, ds.optics, read_noise=3.0
+        )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        given = with_pixel_mask(
+            PolarimetricDataset(
+                light, ds.polarizer_angles, ds.theta, ds.wavelength, ds.optics, read_noise=3.0
+            ),
+            full_well=4e4,
+        )
+    assert given.full_well == 4e4 and given.valid_pixels() is None
