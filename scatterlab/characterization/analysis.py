@@ -186,7 +186,7 @@ def _acquisitions(ds, settings):
     pupil, h = _optics_psf(ds)
     H, W = ds.counts.shape[-2:]
     blank = np.full((H, W), np.nan)
-    valid = ds.valid_pixels() if hasattr(ds, "valid_pixels") else None
+    valid = ds.valid_pixels()
     out = []
     for g, th in enumerate(ds.theta):
         t = ds.truth
@@ -204,7 +204,7 @@ def _acquisitions(ds, settings):
                 ts,
                 td,
                 valid=None if valid is None else valid[g],
-                full_well=getattr(ds, "full_well", None),
+                full_well=ds.full_well,
             )
         )
     return out
@@ -275,13 +275,7 @@ def analyze(
             f"frames = {settings.frames} must divide the dataset's {K} channels into frames of at least "
             "3 polarizer channels"
         )
-    valid = ds.valid_pixels() if hasattr(ds, "valid_pixels") else None
-    censored = getattr(ds, "full_well", None) is not None
-    if (
-        (valid is not None or censored)
-        and settings.psf_refine == "layout"
-        and settings.psf == "blind"
-    ):
+    if _unmeasured_pixels(ds) and settings.psf_refine == "layout" and settings.psf == "blind":
         raise ValueError(
             "psf_refine='layout' (--psf-refine layout) cannot leave out the dataset's bad pixels or "
             "censor its saturated ones yet (bad_pixels, full_well_e, --bad-pixels, --full-well): use "
@@ -418,12 +412,16 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
         executor=executor,
         model_error=settings.model_error,
     )
-    masked = ds.valid_pixels() is not None or getattr(ds, "full_well", None) is not None
-    for e in estimates if masked else ():  # only bad or saturated pixels make a region's hole
+    for e in estimates if _unmeasured_pixels(ds) else ():  # only bad or saturated pixels make holes
         warning = _unmeasured_border(e.name, layout, stack, thetas, sel, margin)
         if warning:
             e.warnings.append(warning)
     return estimates, pixel_maps(stack, thetas, settings.sigma), missing
+
+
+def _unmeasured_pixels(ds) -> bool:
+    """Whether the dataset leaves pixels unmeasured: bad pixels listed, or a full well given."""
+    return ds.valid_pixels() is not None or ds.full_well is not None
 
 
 # a region bordered by unmeasured pixels amounting to more than this share of its size gets a warning

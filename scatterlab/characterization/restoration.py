@@ -177,7 +177,7 @@ def degraded(acq: Acquisition, priors=None) -> Restoration:
     return _unmeasured(Restoration("degraded", S[..., 0], dolp, classes), acq)
 
 
-def measured_pixels(acq: Acquisition) -> np.ndarray | None:
+def _measured_pixels(acq: Acquisition) -> np.ndarray | None:
     """The pixels whose DOLP the acquisition measures (H, W): not bad (``acq.valid``) and with no
     channel at the full well; None when that is all of them.
 
@@ -198,7 +198,7 @@ def measured_pixels(acq: Acquisition) -> np.ndarray | None:
 
 def _unmeasured(rest: Restoration, acq: Acquisition) -> Restoration:
     """``rest`` with its DOLP NaN and its classes -1 where the acquisition measured no DOLP."""
-    valid = measured_pixels(acq)
+    valid = _measured_pixels(acq)
     if valid is None:
         return rest
     rest.valid = valid

@@ -383,7 +383,9 @@ class _Problem:
         ``E[d | d >= ceiling]`` under the prediction ``i`` (K, H, W)."""
         if self.censored is None:
             return self.d
-        return np.where(self.censored, censored_mean(i, self.ceiling), self.d)
+        d = self.d.copy()
+        d[self.censored] = censored_mean(i[self.censored], self.ceiling)
+        return d
 
     def likelihood(self, i) -> float:
         """Poisson log-likelihood sum(d ln i - i) over the measured pixels; a censored value

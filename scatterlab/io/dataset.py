@@ -83,11 +83,11 @@ NEGATIVE_SHARE = 0.1
 # the smallest share of a geometry's pixels that bad_pixels may leave to measure
 MIN_VALID_SHARE = 0.1
 LEFT_OUT_NOTE = "pixels left out of the likelihood per geometry"
-# pixels sharing a channel's highest count that mark it as clipped (saturated): a 3 x 3 plateau
+# pixels crowding a channel's highest count that mark it as clipped (saturated): a 3 x 3 plateau
 PLATEAU_PIXELS = 9
 DEAD_PIXEL_NOTE = "pixels read <= 0 in every channel at every geometry"
 SATURATED_NOTE = "pixels with a channel at the full well"
-PLATEAU_NOTE = "sit at the same highest count"
+PLATEAU_NOTE = "crowd the highest count"
 _OPTICS_KEYS = {
     "pixels_per_lambda_over_d": 1.0,
     "aperture_diameter_mm": 1e-3,
@@ -224,7 +224,7 @@ class PolarimetricDataset:
         ndarray (G, H, W) of bool, or None
             None when every pixel is valid.
         """
-        return _valid(self.counts, self.bad_pixels)
+        return _valid(self.bad_pixels)
 
     @property
     def shape(self) -> tuple:
@@ -280,13 +280,13 @@ def to_flat(ds: PolarimetricDataset, *, dofp_pattern=None) -> dict:
             flat[key] = float(value) / _OPTICS_KEYS[key]
     if ds.read_noise is not None:
         flat["read_noise_e"] = float(ds.read_noise)
-    bad = getattr(ds, "bad_pixels", None)
+    bad = ds.bad_pixels
     if bad is not None and np.any(bad):
         bad = np.asarray(bad, bool)
         if dofp_pattern is not None:  # on the raw frame: each superpixel's four pixels
             bad = np.repeat(np.repeat(bad, 2, axis=-2), 2, axis=-1)
         flat["bad_pixels"] = bad.astype(np.uint8)
-    if getattr(ds, "full_well", None) is not None:
+    if ds.full_well is not None:
         flat["full_well_e"] = float(ds.full_well)
     t = ds.truth
     if t is not None:
@@ -451,11 +451,12 @@ def _bad_pixels(flat, counts_shape, where, raw_frame=None):
     return np.broadcast_to(a != 0, (G, H, W))
 
 
-def _valid(counts, bad):
-    """(G, H, W) bool of the pixels to measure with, or None when all are."""
+def _valid(bad):
+    """(G, H, W) bool of the pixels to measure with (``bad`` (G, H, W) negated), or None when all
+    are."""
     if bad is None or not np.any(bad):
         return None
-    return np.broadcast_to(~np.asarray(bad, bool), counts.shape[:1] + counts.shape[2:]).copy()
+    return ~np.asarray(bad, bool)
 
 
 def _dead_pixel_note(counts, valid, read_noise, where):
@@ -514,7 +515,8 @@ def _saturation_note(counts, read_noise, where):
     g, k = (int(v[0]) for v in np.nonzero(flat))
     note = (
         f"{int(at_top[g, k])} pixels of geometry {g}, channel {k} {PLATEAU_NOTE} "
-        f"{top[g, k]:.6g} e- ({int(flat.sum())} of {G * K} images have such a plateau): saturated? "
+        f"{top[g, k]:.6g} e- (within {tol:g} e-; {int(flat.sum())} of {G * K} images have such a "
+        "plateau): saturated? "
         "Clipped channels make a pixel's DOLP wrong (a saturated area reads as unpolarized, like a "
         "metal). Give the full well (full_well_e, or analyze --full-well), which censors them; "
         "listing them in bad_pixels is worse (docs/characterization_accuracy.md)"
@@ -588,7 +590,7 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
     if read_noise is not None and not (np.isfinite(float(read_noise)) and float(read_noise) >= 0):
         raise ValueError(f"{where}: 'read_noise_e' must be >= 0, got {read_noise}")
     bad = _bad_pixels(flat, counts.shape, where)
-    valid = _valid(counts, bad)
+    valid = _valid(bad)
     full_well = _scalar(flat, "full_well_e", where, required=False)
     if valid is not None:
         share = valid.mean(axis=(1, 2))

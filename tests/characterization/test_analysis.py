@@ -81,18 +81,21 @@ def test_analyze_cli_reads_a_tiff_stack_with_its_sidecar_and_names_wrong_files(t
         AnalyzeSettings(model_error="yes").validate()
 
 
-def test_analyze_with_the_known_diffraction_psf_recovers_the_paint(tmp_path):
-    """Images without turbulence restored with the optics' own PSF: the paint's interval covers its truth
-    (independent truth: the simulated dataset's indices)."""
+def _no_turbulence_plate(size, thetas_deg, edit=None):
+    """A simulated painted aluminium plate without turbulence (seed 4) as a dataset with its truth, and
+    its label map; ``edit(counts, labels)`` may change the counts (G, K, H, W) first."""
     from scatterlab.characterization import Plate, SceneConfig, acquire
     from scatterlab.characterization.scene_config import plate_labels
     from scatterlab.io import Optics, PolarimetricDataset, Truth
 
-    cfg = SceneConfig(image_size=96).validate()
+    cfg = SceneConfig(image_size=size).validate()
     rng = np.random.default_rng(4)
     labels = plate_labels(cfg, rng)
-    thetas = np.radians([30.0, 40.0, 50.0, 60.0])
+    thetas = np.radians(thetas_deg)
     acqs = [acquire(Plate(), labels, th, "no_turbulence", None, cfg, rng) for th in thetas]
+    counts = np.stack([a.counts for a in acqs])
+    if edit is not None:
+        edit(counts, labels)
     truth = Truth(
         labels,
         ["paint", "metal", "scratch"],
@@ -103,7 +106,7 @@ def test_analyze_with_the_known_diffraction_psf_recovers_the_paint(tmp_path):
         dolp=np.stack([a.truth_dolp for a in acqs]),
     )
     ds = PolarimetricDataset(
-        np.stack([a.counts for a in acqs]),
+        counts,
         acqs[0].angles,
         thetas,
         1.55e-6,
@@ -113,6 +116,13 @@ def test_analyze_with_the_known_diffraction_psf_recovers_the_paint(tmp_path):
         title="diffraction-limited plate",
         simulated=True,
     )
+    return ds, labels
+
+
+def test_analyze_with_the_known_diffraction_psf_recovers_the_paint(tmp_path):
+    """Images without turbulence restored with the optics' own PSF: the paint's interval covers its truth
+    (independent truth: the simulated dataset's indices)."""
+    ds, labels = _no_turbulence_plate(96, [30.0, 40.0, 50.0, 60.0])
     analyze(
         ds,
         tmp_path,
@@ -175,40 +185,20 @@ def test_dead_pixels_listed_in_bad_pixels_are_left_out_not_taken_for_metal(tmp_p
     unclassified, and the paint comes out at its truth (independent truth: the simulated indices)."""
     import h5py
 
-    from scatterlab.characterization import Plate, SceneConfig, acquire
-    from scatterlab.characterization.scene_config import plate_labels
-    from scatterlab.io import Optics, PolarimetricDataset, Truth, with_pixel_mask
+    from scatterlab.io import with_pixel_mask
 
-    cfg = SceneConfig(image_size=64).validate()
-    rng = np.random.default_rng(4)
-    labels = plate_labels(cfg, rng)
-    thetas = np.radians([30.0, 45.0, 60.0])
-    acqs = [acquire(Plate(), labels, th, "no_turbulence", None, cfg, rng) for th in thetas]
-    counts = np.stack([a.counts for a in acqs])
-    # a 5 x 3 dead block on paint near the centre column (the keystone barely moves it)
-    rows, cols = np.nonzero(labels[20:44, 28:36] == 0)
-    r0, c0 = 20 + rows[len(rows) // 2], 28 + cols[len(cols) // 2]
     block = np.zeros((64, 64), bool)
-    block[r0 - 2 : r0 + 3, c0 - 1 : c0 + 2] = True
-    counts[:, :, block] = 0.0
-    truth = Truth(
-        labels,
-        ["paint", "metal", "scratch"],
-        np.array([1.39, 1.44, 1.44]),
-        np.array([0.34, 16, 16]),
-        np.full(3, 0.3),
-    )
+
+    def kill(counts, labels):
+        # a 5 x 3 dead block on paint near the centre column (the keystone barely moves it)
+        rows, cols = np.nonzero(labels[20:44, 28:36] == 0)
+        r, c = 20 + rows[len(rows) // 2], 28 + cols[len(cols) // 2]
+        block[r - 2 : r + 3, c - 1 : c + 2] = True
+        counts[:, :, block] = 0.0
+
     with pytest.warns(UserWarning, match="dead pixels"):
-        ds = PolarimetricDataset(
-            counts,
-            acqs[0].angles,
-            thetas,
-            1.55e-6,
-            Optics(pixels_per_lambda_over_d=2.0),
-            read_noise=10.0,
-            truth=truth,
-            simulated=True,
-        )
+        ds, _ = _no_turbulence_plate(64, [30.0, 45.0, 60.0], kill)
+    r0, c0 = (round(float(np.mean(ix))) for ix in np.nonzero(block))  # the block's centre
     settings = AnalyzeSettings(psf="diffraction", iterations=100, posterior_steps=600)
     layouts = {}
     for name, data in (("dead", ds), ("listed", with_pixel_mask(ds, block))):

@@ -428,9 +428,7 @@ def test_a_saturated_plateau_is_pointed_out_and_shot_noise_is_not():
     full = np.quantile(light[1, 2], 0.9)
     clipped = light.copy()
     clipped[1] = np.minimum(clipped[1], full)
-    with pytest.warns(
-        UserWarning, match=r"pixels of geometry 1, channel \d sit at the same highest"
-    ):
+    with pytest.warns(UserWarning, match=r"pixels of geometry 1, channel \d crowd the highest"):
         sat = PolarimetricDataset(
             clipped, ds.polarizer_angles, ds.theta, ds.wavelength, ds.optics, read_noise=10.0
         )
@@ -464,7 +462,7 @@ def test_review_cases_of_bad_pixels_and_saturation():
     light = rng.poisson(np.full((2, 4, 32, 32), 5e4)).astype(float)
     dark = 100 + rng.normal(0, 3, (32, 32))
     clipped = np.minimum(light, 3e4 + 100) - dark  # raw clipped, then the dark subtracted
-    with pytest.warns(UserWarning, match="sit at the same highest"):
+    with pytest.warns(UserWarning, match="crowd the highest"):
         PolarimetricDataset(
             clipped, ds.polarizer_angles, ds.theta, ds.wavelength, ds.optics, read_noise=3.0
         )
