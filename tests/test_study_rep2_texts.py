@@ -101,6 +101,12 @@ def test_coverage_case_text(cover, converged, words):
     assert ("not judged" in short) == (converged < 0.5)
 
 
+def test_a_quick_coverage_run_is_recorded_not_judged():
+    """Six trials of a quick run: even a 0.9 -> 0.5 miss is recorded, not called under-coverage."""
+    text, short = _load("coverage").case_text("paint", _coverage_case(0.5, 1.0), 6, judged=False)
+    assert "not judged" in text and "UNDER" not in text and short == "not judged (quick)"
+
+
 def _taper(peak_std, peak_dbl, range_std, range_dbl):
     return {
         "rms_log10_change_in_lobe": 0.076,
