@@ -4,7 +4,8 @@ A plate seen at :math:`\theta_r` from far away is foreshortened by :math:`\cos\t
 incidence (the far-field limit of the keystone distortion the reference mentions): the camera pixel at
 :math:`x_c` sees the object point :math:`x = x_c/\cos\theta_r`, the other axis unchanged. Images of several
 geometries are brought to common object coordinates by the inverse stretch, then aligned by the translation
-(turbulent tilt, pointing) estimated by cross-correlation with sub-pixel parabolic refinement.
+(turbulent tilt, pointing) estimated by the normalised cross-correlation over the fields' overlap, with
+sub-pixel parabolic refinement.
 
 Axes: images are ``(..., H, W)``; the plane of incidence is along ``W`` (columns); the stretch is about the
 image centre.
@@ -94,17 +95,28 @@ def keystone_correct(image, theta_r, order: int = 1) -> np.ndarray:
     return np.stack(out).reshape(img.shape)
 
 
-def estimate_shift(reference, image, max_shift=None) -> np.ndarray:
+def estimate_shift(
+    reference, image, max_shift=None, *, reference_mask=None, image_mask=None
+) -> np.ndarray:
     """Translation ``(dy, dx)`` [pixels] that, applied to ``image`` (:func:`apply_shift`), best aligns it with
-    ``reference`` (both ``(H, W)``): the peak of their cross-correlation within ``max_shift`` (default a quarter
-    of the smaller side), refined by a parabola per axis. Plain rather than phase correlation: the images
-    compared are blurred to different degrees, and whitening would weight their noisiest frequencies most.
+    ``reference`` (both ``(H, W)``): the peak of their normalised cross-correlation over the overlap of the
+    two fields (Padfield's masked form, "Masked object registration in the Fourier domain", IEEE TIP 2012)
+    within ``max_shift`` (default a quarter of the smaller side), refined by a parabola per axis.
+
+    Each candidate shift is scored by the correlation coefficient of the pixels the two images share at that
+    shift, so neither the wrap-around of a circular correlation nor the shrinking overlap of a zero-padded
+    one pulls the answer toward zero shift. That pull matters for a plate whose bright metal lies along the
+    field's edges: the plain circular correlation put a D/r0 12.9 image 23 pixels off (measured on the
+    default scene at 50 deg, 27 Nov 2026). Plain rather than phase correlation: the images compared are
+    blurred to different degrees, and whitening would weight their noisiest frequencies most.
 
     Parameters
     ----------
     reference, image : ndarray, shape (H, W)
     max_shift : float, optional
         Largest shift searched [pixels].
+    reference_mask, image_mask : ndarray of bool, shape (H, W), optional
+        Pixels of each image to use (default all): unmeasured pixels are left out of the correlation.
 
     Returns
     -------
@@ -117,23 +129,51 @@ def estimate_shift(reference, image, max_shift=None) -> np.ndarray:
         raise ValueError(
             f"reference {a.shape} and image {b.shape} must be 2-D images of the same shape"
         )
+    masks = []
+    for name, m in (("reference_mask", reference_mask), ("image_mask", image_mask)):
+        m = np.ones(a.shape) if m is None else np.asarray(m, bool).astype(float)
+        if m.shape != a.shape:
+            raise ValueError(f"{name} must have the images' shape {a.shape}, got {m.shape}")
+        masks.append(m)
+    ma, mb = masks
+    a, b = np.where(ma > 0, a, 0.0), np.where(mb > 0, b, 0.0)
     max_shift = min(a.shape) / 4 if max_shift is None else float(max_shift)
-    c = np.fft.irfft2(np.fft.rfft2(a - a.mean()) * np.conj(np.fft.rfft2(b - b.mean())), s=a.shape)
-    size = np.array(c.shape)
-    lag = [np.where(np.arange(n) > n / 2, np.arange(n) - n, np.arange(n)) for n in c.shape]
+    size = (2 * a.shape[0], 2 * a.shape[1])  # zero-padded: a linear, not circular, correlation
+
+    def ft(x):
+        return np.fft.rfft2(x, s=size)
+
+    def corr(x, y):  # sum over p of x(p + s) y(p), for every shift s
+        return np.fft.irfft2(x * np.conj(y), s=size)
+
+    A, B, MA, MB = ft(a), ft(b), ft(ma), ft(mb)
+    n = np.maximum(np.rint(corr(MA, MB)), 1.0)  # pixels shared at each shift
+    sa, sb = corr(A, MB), corr(MA, B)
+    cov = corr(A, B) - sa * sb / n
+    var_a = np.maximum(corr(ft(a * a), MB) - sa**2 / n, 0.0)
+    var_b = np.maximum(corr(MA, ft(b * b)) - sb**2 / n, 0.0)
+    den = np.sqrt(var_a * var_b)
+    lag = [np.where(np.arange(m) > m / 2, np.arange(m) - m, np.arange(m)) for m in size]
     allowed = (np.abs(lag[0])[:, None] <= max_shift) & (np.abs(lag[1])[None, :] <= max_shift)
-    peak = np.array(np.unravel_index(np.argmax(np.where(allowed, c, -np.inf)), c.shape))
-    shift = peak.astype(float)
+    # a shift needs enough shared pixels for its coefficient to mean something
+    allowed &= n >= 0.25 * min(ma.sum(), mb.sum())
+    scale = den.max() if den.max() > 0 else 1.0
+    ok = allowed & (den > 1e-12 * scale)
+    if not ok.any():  # a flat image: nothing to align
+        return np.zeros(2)
+    c = np.where(ok, cov / np.where(ok, den, 1.0), -np.inf)
+    peak = np.array(np.unravel_index(np.argmax(c), c.shape))
+    shift = np.array([lag[0][peak[0]], lag[1][peak[1]]], float)
     for ax in (0, 1):
         idx = [peak[0], peak[1]]
         vals = []
         for d in (-1, 0, 1):
             idx[ax] = (peak[ax] + d) % size[ax]
             vals.append(c[tuple(idx)])
-        den = vals[0] - 2 * vals[1] + vals[2]
-        if den < 0:
-            shift[ax] += 0.5 * (vals[0] - vals[2]) / den
-    return np.where(shift > size / 2, shift - size, shift)
+        den_ax = vals[0] - 2 * vals[1] + vals[2]
+        if np.all(np.isfinite(vals)) and den_ax < 0:
+            shift[ax] += 0.5 * (vals[0] - vals[2]) / den_ax
+    return shift
 
 
 def apply_shift(image, shift, order: int = 1) -> np.ndarray:
@@ -243,7 +283,11 @@ def register_restoration(
     if valid is not None:  # unmeasured pixels: carried along, so that none of their guess leaks out
         valid = np.asarray(valid, float)
         valid = keystone_correct(valid, theta_r) if foreshortened else valid
-    shift = np.zeros(2) if reference is None else estimate_shift(reference, s0)
+    shift = (
+        np.zeros(2)
+        if reference is None
+        else estimate_shift(reference, s0, image_mask=None if valid is None else valid > 0.999)
+    )
     if reference is not None:
         s0, dolp = apply_shift(s0, shift), apply_shift(dolp, shift)
         cls = None if cls is None else apply_shift(cls, shift, order=0)

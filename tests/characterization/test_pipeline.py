@@ -105,7 +105,7 @@ def test_scene_files_are_validated(tmp_path):
 
 def test_keystone_registration_recovers_object_coordinates_and_shifts():
     """Foreshortening by cos(theta) and its inverse stretch bring a label map back (up to the half-pixel
-    rounding of nearest-neighbour sampling); phase correlation finds a sub-pixel translation."""
+    rounding of nearest-neighbour sampling); the correlation finds a sub-pixel translation."""
     from scatterlab.characterization.registration import (
         apply_shift,
         estimate_shift,
@@ -149,6 +149,33 @@ def test_keystone_registration_recovers_object_coordinates_and_shifts():
         keystone_correct(img, np.radians(89.5))
     with pytest.raises(ValueError, match="same shape"):
         estimate_shift(img, img[:10])
+
+
+def test_registration_finds_large_shifts_of_a_plate_whose_metal_runs_off_the_field():
+    """A blurred view of a plate whose bright metal runs off the field's edges, cut from a larger scene 4
+    and -15 pixels away from the sharp reference: the normalised correlation over the fields' overlap
+    finds the known offset (the plain circular correlation answered (0, 10) here, pulled toward zero by
+    the wrap-around). Dead pixels listed in ``image_mask`` are left out."""
+    from scipy import ndimage
+
+    from scatterlab.characterization.registration import estimate_shift
+
+    H = 96
+    big = np.full((2 * H, 2 * H), 1.0)
+    big[:, : H // 2 + 10] = 12.0  # a metal strip running off the field's left edge
+    big[H // 2 - 10 : H // 2 + 20, H + 20 :] = 12.0  # and a block off its right edge
+    sharp = big[H // 2 : H // 2 + H, H // 2 : H // 2 + H]
+    y0, x0 = H // 2 - 4, H // 2 + 15  # the content sits at +4 rows, -15 columns: align by (-4, +15)
+    moved = ndimage.gaussian_filter(big, 6.0)[y0 : y0 + H, x0 : x0 + H]
+    np.testing.assert_allclose(estimate_shift(sharp, moved), [-4.0, 15.0], atol=0.5)
+    dead = moved.copy()
+    dead[30:60, 20:50] = 0.0
+    ok = np.ones(dead.shape, bool)
+    ok[30:60, 20:50] = False
+    np.testing.assert_allclose(estimate_shift(sharp, dead, image_mask=ok), [-4.0, 15.0], atol=0.5)
+    with pytest.raises(ValueError, match="image_mask"):
+        estimate_shift(sharp, moved, image_mask=ok[:10])
+    np.testing.assert_array_equal(estimate_shift(np.ones((8, 8)), np.ones((8, 8))), [0.0, 0.0])
 
 
 def test_deconvolutions_are_checkpointed_and_resumed(tmp_path, monkeypatch):
