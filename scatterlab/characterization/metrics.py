@@ -27,7 +27,7 @@ from scatterlab.characterization.estimation import (
     region_posteriors,
 )
 
-__all__ = ["score_plate", "rmse"]
+__all__ = ["score_plate", "rmse", "reference_classes"]
 
 
 def rmse(a, b, sel) -> float:
@@ -106,11 +106,34 @@ def _psf_errors(obs, case):
     return {"psf_l1_error": float(np.mean(d)), "psf_l1_error_per_geometry": d}
 
 
+def reference_classes(observation, priors) -> np.ndarray:
+    """The classification the others are scored against: the restored no-turbulence image's own classes
+    (the same classifier as every other image's), or its DOLP thresholds when it has none.
+
+    Parameters
+    ----------
+    observation : Observation
+        One geometry's registered images.
+    priors : tuple of SuperGaussianPrior
+        The DOLP priors.
+
+    Returns
+    -------
+    ndarray of int, shape (H, W)
+    """
+    from scatterlab.deconvolution import classify_dolp
+
+    im = observation.images[("no_turbulence", "restored")]
+    if im.classes is not None:
+        return np.asarray(im.classes)
+    return classify_dolp(np.nan_to_num(im.dolp), priors)
+
+
 def _classification(result, case, kind, mid, sel, priors):
-    from scatterlab.deconvolution import classification_errors, classify_dolp
+    from scatterlab.deconvolution import classification_errors
 
     o = result.observations[mid]
-    ref = classify_dolp(np.nan_to_num(o.images[("no_turbulence", "restored")].dolp), priors)
+    ref = reference_classes(o, priors)
     cls = ref if (case, kind) == ("no_turbulence", "restored") else o.images[(case, kind)].classes
     metal = tuple(range(1, len(priors)))
     return {

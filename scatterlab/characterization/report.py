@@ -200,10 +200,10 @@ def plate_figure(out, result, cfg) -> Path:
 
 
 def _ref_classes(result, mid, cfg):
-    from scatterlab.deconvolution import PRIOR_SETS, classify_dolp
+    from scatterlab.characterization.metrics import reference_classes
+    from scatterlab.deconvolution import PRIOR_SETS
 
-    dolp = result.observations[mid].images[("no_turbulence", "restored")].dolp
-    return classify_dolp(np.nan_to_num(dolp), PRIOR_SETS[cfg.priors])
+    return reference_classes(result.observations[mid], PRIOR_SETS[cfg.priors])
 
 
 def _write_h5(path: Path, cfg, results) -> None:
@@ -326,6 +326,16 @@ def acceptance_checks(cfg, results) -> list:
                         "<= 0.06",
                         f"{c['total_error']:.4f}",
                         c["total_error"] <= 0.06,
+                    )
+                )
+            d = deg.get("classification_vs_no_turbulence")
+            if c and d:
+                out.append(
+                    (
+                        f"{p.metal}, D/r0 = {case:g}: corrected better than degraded in "
+                        "classification error",
+                        f"{c['total_error']:.4f} vs {d['total_error']:.4f}",
+                        c["total_error"] < d["total_error"],
                     )
                 )
             for metric in (

@@ -344,17 +344,17 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
         plural = "s" if len(after) > 1 else ""
         notes.append(
             f"- **{len(after)} failure{plural} after deconvolution.** The blind PSF estimates' L1 "
-            f"distance from the true PSFs (0 = the true PSF, 2 = disjoint): {dist}. A wrong PSF leaves ghost copies of "
-            "the scratches and of the metal's edges in the corrected images (parallel lines and streaks "
-            "in the S0 and DOLP maps) and moves the edges the classification draws. On the default "
-            "scene this was measured to be the cause: given the true PSF over the whole field, the same "
-            "restoration classifies its 50-degree images at 0.010-0.047 against the no-turbulence "
-            "classification after 600 iterations, and no blind estimate from one frame tried so far "
-            "gets near that. Two defocused cameras beside the polarimeter (phase diversity, "
-            "`scatterlab.deconvolution.phase_diversity`) identify it at D/r0 7.9: on the default "
-            "scene's aluminium they classified at 0.032 after 2000 iterations (true PSF 0.023), at 12.9 "
-            "not yet (0.131; true PSF 0.036). This scene does not simulate them; the scene key "
-            "`phase_diversity_waves` does (`docs/characterization_accuracy.md`)."
+            f"distance from the true PSFs (0 = the true PSF, 2 = disjoint): {dist}. A wrong PSF leaves "
+            "ghost copies of the scratches and of the metal's edges in the corrected images (parallel "
+            "lines and streaks in the S0 and DOLP maps). They raise the S0 error, also away from the "
+            "edges, and the metal's per-pixel |eta error|: a metal's DOLP is a few hundredths, and the "
+            "overshoot beside its edges dominates it. With the true PSF over the whole field the same "
+            "restoration leaves no ghosts. The classification unmixes the Stokes images, which puts the "
+            "plate's edges where they are in the degraded and the corrected images alike. Neither "
+            "classifies the scratches, one or two pixels wide: the blur leaves them less than half "
+            "metal, and they are most of the classification error left in both images. Two defocused "
+            "cameras beside the polarimeter (phase diversity, scene key `phase_diversity_waves`) "
+            "identify the PSF at D/r0 7.9 but not yet at 12.9 (`docs/characterization_accuracy.md`)."
         )
     # the calibrated statements: the paint's marginal intervals and every joint region (a metal's
     # marginal interval follows the prior along its ridge of equal DOLP: its note says so)

@@ -5,7 +5,9 @@
   :func:`psf_distance`, an estimate's L1 distance from the true PSF;
 * :mod:`priors` -- super-Gaussian DOLP priors (Eq. 195), the MAP DOLP update (Eq. 196), adaptive priors;
 * classification: several priors given to :func:`blind_deconvolve` label each pixel by the prior whose
-  update maximizes the objective; :func:`classification_errors` scores a label map like Table 4;
+  update maximizes the objective; :func:`classify_unmixing` refines a classification by linear unmixing
+  of the Stokes images (edges where a blurred image has them); :func:`classification_errors` scores a
+  label map like Table 4;
 * :func:`layout_psf` -- the PSF of one frame, or of each of several exposures, found with a few-material
   object (each material uniform; a soft layout, or pure interiors with mixing only along the edges): the
   prior a single frame's likelihood needs to tell the PSF;
@@ -13,7 +15,11 @@
   cameras beside the polarimeter): an instrument that identifies the PSF where one frame cannot.
 """
 
-from scatterlab.deconvolution.classify import classification_errors, classify_dolp
+from scatterlab.deconvolution.classify import (
+    classification_errors,
+    classify_dolp,
+    classify_unmixing,
+)
 from scatterlab.deconvolution.em import (
     DeconvolutionResult,
     EMOptions,
@@ -73,6 +79,7 @@ __all__ = [
     "map_objective",
     "classification_errors",
     "classify_dolp",
+    "classify_unmixing",
     "initial_psf",
     "layout_psf",
     "LayoutResult",

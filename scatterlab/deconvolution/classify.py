@@ -1,10 +1,16 @@
-"""Scoring a material classification against a reference label map (Table 4's columns)."""
+"""Material classification of polarimetric images and its scoring against a reference (Table 4's columns).
+
+* :func:`classify_dolp` -- the DOLP thresholds of Ch. V: each pixel to the prior of largest density;
+* :func:`classify_unmixing` -- a classification refined by linear unmixing of the Stokes images, which
+  places the edges of a blurred image where they are;
+* :func:`classification_errors` -- Table 4's error columns.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["classification_errors", "classify_dolp"]
+__all__ = ["classification_errors", "classify_dolp", "classify_unmixing"]
 
 
 def classification_errors(estimate, truth, *, metal_classes=(1,), mask=None) -> dict:
@@ -86,3 +92,82 @@ def classify_dolp(dolp, priors) -> np.ndarray:
             [np.nan_to_num(pr.log_pdf(P), nan=-np.inf, neginf=-np.inf) for pr in priors]
         )
     return np.argmax(logs, axis=0)
+
+
+def classify_unmixing(
+    s0, dolp, classes, *, erode: int = 3, min_pixels: int = 16, iterations: int = 20
+) -> np.ndarray:
+    r"""Refine a classification by linear unmixing of the Stokes images: each pixel goes to the material
+    whose Stokes vector :math:`(S_0, S_1)` is nearest its own.
+
+    Blur mixes the Stokes images linearly (every channel sees the same PSF), so a pixel near an edge is a
+    mixture :math:`a\,\mathbf{s}_m + (1-a)\,\mathbf{s}_d` of the two materials' Stokes vectors, and the
+    nearest material is the one with :math:`a > 1/2`: for a PSF with a centre of symmetry the edge stays
+    where it is. The DOLP is a ratio, so a DOLP threshold does not: under a metal :math:`r` times brighter
+    than the paint, a pixel with DOLP :math:`P_m a r + P_d(1-a)` over :math:`a r + 1 - a` falls below the
+    Ch. V threshold of 0.30 once :math:`a` exceeds 0.14 (:math:`r = 12`, :math:`P_d = 0.88`,
+    :math:`P_m = 0.01`), and the metal grows into the paint by the width of the blur's tail. On the default
+    scene's blind restorations at 50 deg this halved the classification error (measured 27 Nov 2026;
+    ``docs/characterization_accuracy.md``).
+
+    Each material's Stokes vector is the median over its pixels at least ``erode`` pixels inside its region
+    of ``classes`` (its pure interior), and the assignment and the medians are repeated until the classes
+    stop changing. It assumes, as the plate scenes do, that each material is uniform over the field at one
+    geometry.
+
+    Parameters
+    ----------
+    s0 : array_like, shape (H, W)
+        Irradiance [photo-electrons].
+    dolp : array_like, shape (H, W)
+        Signed DOLP :math:`S_1/S_0` (the geometry fixes the angle of polarization); NaN where unmeasured.
+    classes : array_like of int, shape (H, W)
+        The classification to refine (for instance :func:`classify_dolp`'s); -1 = unclassified, kept.
+    erode : int
+        Erosion [pixels] of each region before its median is taken (at least 0).
+    min_pixels : int
+        A region with fewer pixels left after the erosion takes its median over all its pixels (at least 1).
+    iterations : int
+        Most rounds of assignment and medians (at least 1).
+
+    Returns
+    -------
+    ndarray of int, shape (H, W)
+        The refined classes (the labels of ``classes``; -1 where ``classes`` is -1 or the pixel unmeasured).
+    """
+    from scipy import ndimage
+
+    s0 = np.asarray(s0, float)
+    P = np.asarray(dolp, float)
+    lab = np.asarray(classes)
+    if s0.shape != P.shape or s0.shape != lab.shape or s0.ndim != 2:
+        raise ValueError(
+            f"s0 {s0.shape}, dolp {P.shape} and classes {lab.shape} must be 2-D images of one shape"
+        )
+    for name, v, lo in (
+        ("erode", erode, 0),
+        ("min_pixels", min_pixels, 1),
+        ("iterations", iterations, 1),
+    ):
+        if int(v) != v or v < lo:
+            raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
+    measured = np.isfinite(s0) & np.isfinite(P) & (lab >= 0)
+    lab = np.where(measured, lab, -1).astype(int)
+    X = np.stack([np.where(measured, s0, 0.0), np.where(measured, s0 * P, 0.0)], axis=-1)
+    for _ in range(int(iterations)):
+        names, ends = [], []
+        for k in np.unique(lab[lab >= 0]):
+            region = lab == k
+            pure = ndimage.binary_erosion(region, iterations=erode) if erode else region
+            if pure.sum() < min_pixels:
+                pure = region
+            names.append(k)
+            ends.append(np.median(X[pure], axis=0))
+        if len(names) < 2:  # one material: nothing to unmix
+            return lab
+        d2 = np.stack([np.sum((X - e) ** 2, axis=-1) for e in ends])
+        new = np.where(measured, np.asarray(names)[np.argmin(d2, axis=0)], -1)
+        if np.array_equal(new, lab):
+            break
+        lab = new
+    return lab

@@ -657,3 +657,38 @@ def test_a_lost_exposure_keeps_its_psf_and_leaves_the_other_frame_intact(mode):
     np.testing.assert_allclose(both.psfs[0], alone.psfs[0], rtol=0, atol=1e-5 * peak)
     np.testing.assert_allclose(both.dolp, alone.dolp, rtol=1e-6, atol=1e-9)
     np.testing.assert_allclose(both.s0, 0.5 * alone.s0, rtol=1e-6)
+
+
+def test_unmixing_puts_a_blurred_edge_where_it_is_and_the_dolp_threshold_does_not():
+    """A straight paint/metal edge (metal 12 times brighter, DOLP 0.01 against 0.88) blurred by a
+    symmetric Gaussian: the DOLP threshold of Ch. V (0.30) calls metal every pixel with more than 14 % of
+    metal light, about sigma to the paint's side (Phi^-1(0.857) = 1.07 sigma); the nearest material's
+    Stokes vector puts the edge at the mixing fraction 1/2, where the true edge is. Unclassified and
+    unmeasured pixels stay unclassified, and one material alone is left as it is."""
+    from scipy import ndimage
+
+    from scatterlab.deconvolution import PRIOR_SETS, classify_dolp, classify_unmixing
+
+    H, edge, sigma = 64, 30, 4.0
+    metal = np.zeros((H, H), bool)
+    metal[:, :edge] = True
+    s0_true = np.where(metal, 12.0, 1.0) * 1e4
+    s1_true = np.where(metal, 0.01 * 12.0, 0.88) * 1e4
+    s0 = ndimage.gaussian_filter(s0_true, sigma, mode="nearest")
+    dolp = ndimage.gaussian_filter(s1_true, sigma, mode="nearest") / s0
+    by_dolp = classify_dolp(dolp, PRIOR_SETS["ch7"])
+    unmixed = classify_unmixing(s0, dolp, by_dolp)
+    # columns called metal in the middle row: the true edge is at column 30
+    assert by_dolp[H // 2].sum() - edge >= round(1.07 * sigma) - 1
+    assert unmixed[H // 2].sum() == edge
+    np.testing.assert_array_equal(unmixed, metal.astype(int))
+    # unmeasured and unclassified pixels keep no class
+    d2, c2 = dolp.copy(), by_dolp.copy()
+    d2[5, 5], c2[6, 6] = np.nan, -1
+    out = classify_unmixing(s0, d2, c2)
+    assert out[5, 5] == -1 and out[6, 6] == -1 and out[20, 50] == 0
+    np.testing.assert_array_equal(classify_unmixing(s0, dolp, np.zeros((H, H), int)), 0)
+    with pytest.raises(ValueError, match="erode"):
+        classify_unmixing(s0, dolp, by_dolp, erode=-1)
+    with pytest.raises(ValueError, match="one shape"):
+        classify_unmixing(s0, dolp[:5], by_dolp)
