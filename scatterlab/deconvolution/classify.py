@@ -95,7 +95,7 @@ def classify_dolp(dolp, priors) -> np.ndarray:
 
 
 def classify_unmixing(
-    s0, dolp, classes, *, erode: int = 3, min_pixels: int = 16, iterations: int = 20
+    s0, dolp, classes, *, purest: float = 0.2, iterations: int = 20
 ) -> np.ndarray:
     r"""Refine a classification by linear unmixing of the Stokes images: each pixel goes to the material
     whose Stokes vector :math:`(S_0, S_1)` is nearest its own.
@@ -107,13 +107,16 @@ def classify_unmixing(
     than the paint, a pixel with DOLP :math:`P_m a r + P_d(1-a)` over :math:`a r + 1 - a` falls below the
     Ch. V threshold of 0.30 once :math:`a` exceeds 0.14 (:math:`r = 12`, :math:`P_d = 0.88`,
     :math:`P_m = 0.01`), and the metal grows into the paint by the width of the blur's tail. On the default
-    scene's blind restorations at 50 deg this halved the classification error (measured 27 Nov 2026;
-    ``docs/characterization_accuracy.md``).
+    scene's blind restorations at 50 deg this cut the classification error by half or more (measured 27
+    Nov 2026; ``docs/characterization_accuracy.md``).
 
-    Each material's Stokes vector is the median over its pixels at least ``erode`` pixels inside its region
-    of ``classes`` (its pure interior), and the assignment and the medians are repeated until the classes
-    stop changing. It assumes, as the plate scenes do, that each material is uniform over the field at one
-    geometry.
+    Each material's Stokes vector is the median over its purest pixels: the ``purest`` fraction of its
+    class whose DOLP lies farthest toward that material's side (lowest for the class of lowest median
+    DOLP, highest for the highest, nearest the class median for one in between). Between two materials the
+    DOLP is monotone in the mixing fraction, so these are the least mixed pixels even where blur leaves no
+    pure interior (thin strokes; eroding the regions instead did worse there). The assignment and the
+    medians are repeated until the classes stop changing. It assumes, as the plate scenes do, that each
+    material is uniform over the field at one geometry.
 
     Parameters
     ----------
@@ -123,10 +126,8 @@ def classify_unmixing(
         Signed DOLP :math:`S_1/S_0` (the geometry fixes the angle of polarization); NaN where unmeasured.
     classes : array_like of int, shape (H, W)
         The classification to refine (for instance :func:`classify_dolp`'s); -1 = unclassified, kept.
-    erode : int
-        Erosion [pixels] of each region before its median is taken (at least 0).
-    min_pixels : int
-        A region with fewer pixels left after the erosion takes its median over all its pixels (at least 1).
+    purest : float
+        Fraction of each class whose median is its material's Stokes vector, in (0, 1].
     iterations : int
         Most rounds of assignment and medians (at least 1).
 
@@ -135,8 +136,6 @@ def classify_unmixing(
     ndarray of int, shape (H, W)
         The refined classes (the labels of ``classes``; -1 where ``classes`` is -1 or the pixel unmeasured).
     """
-    from scipy import ndimage
-
     s0 = np.asarray(s0, float)
     P = np.asarray(dolp, float)
     lab = np.asarray(classes)
@@ -144,29 +143,28 @@ def classify_unmixing(
         raise ValueError(
             f"s0 {s0.shape}, dolp {P.shape} and classes {lab.shape} must be 2-D images of one shape"
         )
-    for name, v, lo in (
-        ("erode", erode, 0),
-        ("min_pixels", min_pixels, 1),
-        ("iterations", iterations, 1),
-    ):
-        if int(v) != v or v < lo:
-            raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
+    if not 0 < purest <= 1:
+        raise ValueError(f"purest must be in (0, 1], got {purest!r}")
+    if int(iterations) != iterations or iterations < 1:
+        raise ValueError(f"iterations must be an integer >= 1, got {iterations!r}")
     measured = np.isfinite(s0) & np.isfinite(P) & (lab >= 0)
     lab = np.where(measured, lab, -1).astype(int)
     X = np.stack([np.where(measured, s0, 0.0), np.where(measured, s0 * P, 0.0)], axis=-1)
     for _ in range(int(iterations)):
-        names, ends = [], []
-        for k in np.unique(lab[lab >= 0]):
-            region = lab == k
-            pure = ndimage.binary_erosion(region, iterations=erode) if erode else region
-            if pure.sum() < min_pixels:
-                pure = region
-            names.append(k)
-            ends.append(np.median(X[pure], axis=0))
+        names = np.unique(lab[lab >= 0])
         if len(names) < 2:  # one material: nothing to unmix
             return lab
+        medians = np.array([np.median(P[lab == k]) for k in names])
+        lowest, highest = names[np.argmin(medians)], names[np.argmax(medians)]
+        ends = []
+        for k, med in zip(names, medians):
+            v = P[lab == k]
+            # how far each pixel's DOLP lies toward this material's side
+            toward = -v if k == lowest else v if k == highest else -np.abs(v - med)
+            keep = toward >= np.quantile(toward, 1 - purest)
+            ends.append(np.median(X[lab == k][keep], axis=0))
         d2 = np.stack([np.sum((X - e) ** 2, axis=-1) for e in ends])
-        new = np.where(measured, np.asarray(names)[np.argmin(d2, axis=0)], -1)
+        new = np.where(measured, names[np.argmin(d2, axis=0)], -1)
         if np.array_equal(new, lab):
             break
         lab = new

@@ -663,7 +663,8 @@ def test_unmixing_puts_a_blurred_edge_where_it_is_and_the_dolp_threshold_does_no
     """A straight paint/metal edge (metal 12 times brighter, DOLP 0.01 against 0.88) blurred by a
     symmetric Gaussian: the DOLP threshold of Ch. V (0.30) calls metal every pixel with more than 14 % of
     metal light, about sigma to the paint's side (Phi^-1(0.857) = 1.07 sigma); the nearest material's
-    Stokes vector puts the edge at the mixing fraction 1/2, where the true edge is. Unclassified and
+    Stokes vector puts the edge at the mixing fraction 1/2, where the true edge is, and keeps a stroke
+    too thin to have a pure interior at its width. Unclassified and
     unmeasured pixels stay unclassified, and one material alone is left as it is."""
     from scipy import ndimage
 
@@ -682,13 +683,26 @@ def test_unmixing_puts_a_blurred_edge_where_it_is_and_the_dolp_threshold_does_no
     assert by_dolp[H // 2].sum() - edge >= round(1.07 * sigma) - 1
     assert unmixed[H // 2].sum() == edge
     np.testing.assert_array_equal(unmixed, metal.astype(int))
+    # a stroke 3 pixels wide beside a metal half-plane, blurred by sigma 1.5: its centre row is 68 % metal
+    # and its next rows 58 %, the rows beyond 36 % (Gaussian integrals); unmixing keeps the 3 columns,
+    # the DOLP threshold (more than 14 % metal) takes 7
+    stroke = metal.copy()
+    stroke[:, 44:47] = True
+    s0_t = np.where(stroke, 12.0, 1.0) * 1e4
+    s0_b = ndimage.gaussian_filter(s0_t, 1.5, mode="nearest")
+    s1_b = ndimage.gaussian_filter(np.where(stroke, 0.12, 0.88) * 1e4, 1.5, mode="nearest")
+    thin_dolp = classify_dolp(s1_b / s0_b, PRIOR_SETS["ch7"])
+    assert thin_dolp[H // 2, 36:56].sum() == 7
+    np.testing.assert_array_equal(
+        classify_unmixing(s0_b, s1_b / s0_b, thin_dolp), stroke.astype(int)
+    )
     # unmeasured and unclassified pixels keep no class
     d2, c2 = dolp.copy(), by_dolp.copy()
     d2[5, 5], c2[6, 6] = np.nan, -1
     out = classify_unmixing(s0, d2, c2)
     assert out[5, 5] == -1 and out[6, 6] == -1 and out[20, 50] == 0
     np.testing.assert_array_equal(classify_unmixing(s0, dolp, np.zeros((H, H), int)), 0)
-    with pytest.raises(ValueError, match="erode"):
-        classify_unmixing(s0, dolp, by_dolp, erode=-1)
+    with pytest.raises(ValueError, match="purest"):
+        classify_unmixing(s0, dolp, by_dolp, purest=0.0)
     with pytest.raises(ValueError, match="one shape"):
         classify_unmixing(s0, dolp[:5], by_dolp)
