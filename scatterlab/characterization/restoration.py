@@ -259,9 +259,8 @@ def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int
             ).encode()
         )
     pri = tuple((p.c2, p.c3, p.m, p.name) for p in settings.priors or ())
-    h.update(
-        b"classes: DOLP priors, then linear unmixing"
-    )  # checkpoints of older classes are stale
+    # the classifier too: checkpoints holding an older one's classes are stale
+    h.update(b"classes: DOLP priors, then linear unmixing")
     h.update(
         repr(
             (
