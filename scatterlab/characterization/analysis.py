@@ -76,7 +76,7 @@ class AnalyzeSettings:
         by linear unmixing, :func:`scatterlab.deconvolution.classify_unmixing`, as ``characterize``
         classifies). Unmixing puts the paint beside the metal into the paint's region, whose DOLP the
         halo dilutes more than a self-calibration from the same data corrects (on the bundled
-        example: paint n 2.11 [68 %: 1.40, 2.83] with unmixed adaptive classes, 1.64 [1.37, 1.95]
+        example: paint n 2.23 [68 %: 1.54, 2.73] with unmixed adaptive classes, 1.64 [1.37, 1.95]
         without), so the adaptive classes are not unmixed. A restoration that leaves the dielectric's DOLP well below
         its true value (a blind one through strong turbulence) puts much of the paint beyond the
         fixed priors' threshold; the adaptive classes follow the data.
