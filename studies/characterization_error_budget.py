@@ -8,14 +8,17 @@ is left is the model: rendering against inversion). For each it records the DOLP
 classification error against the true labels, and the |eta| error of n - j kappa fitted to each region's mean
 DOLP (least squares, sigma known), per image kind. A stage's share is how much the error falls when that stage
 alone is ideal. Full mode (128 px at plate zoom 4, 7 geometries, D/r0 7.9 and 12.9, 150 iterations, aluminium
-plate): 74 minutes on 2 cores shared with two other jobs (load 5-11).
+plate): 594 s on 2 cores shared with a test run (27 Nov 2026); 74 minutes once, with two other jobs.
 
-Last full run (seed 20101210): for the corrected images the largest source is the optics' blur itself
-(class error vs labels at D/r0 7.9: 0.105 -> 0.026 without it); among the stages the restoration can
-improve it is the blind PSF estimate (paint |eta error| at D/r0 12.9: 0.503 -> 0.299 with the true PSF; DOLP
-RMSE 0.245 -> 0.198 and 0.281 -> 0.238; class error 0.105 -> 0.076 and 0.137 -> 0.108). For the restored
-no-turbulence image, what the known-PSF restoration leaves of the halo (DOLP RMSE 0.091 -> 0.052; the paint's
-region index is already within 0.008).
+Last full run (seed 20101210, 27 Nov 2026, with the registration over the fields' overlap and the classes
+refined by linear unmixing): for the corrected images the largest source of every error is the blind PSF
+estimate. With the true PSF the class error vs labels falls from 0.028 to 0.008 (D/r0 7.9) and from 0.034 to
+0.018 (12.9), the DOLP RMSE from 0.236 to 0.198 and from 0.285 to 0.238, and the paint's |eta error| from
+0.216 to 0.126 and from 0.503 to 0.299. Perfect registration changes nothing any more (0.028 and 0.034).
+The run before, with the circular registration and DOLP classes, had the class error at 0.105 and 0.137, the
+largest part of it the optics' blur (0.026 without it). For the restored no-turbulence image, what the
+known-PSF restoration leaves of the halo (DOLP RMSE 0.091 -> 0.052; the paint's region index is already
+within 0.008).
 """
 
 import numpy as np
