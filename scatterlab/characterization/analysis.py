@@ -77,9 +77,9 @@ class AnalyzeSettings:
         classifies). Unmixing puts the paint beside the metal into the paint's region, whose DOLP the
         halo dilutes more than a self-calibration from the same data corrects (on the bundled
         example: paint n 2.23 [68 %: 1.54, 2.73] with unmixed adaptive classes, 1.64 [1.37, 1.95]
-        without), so the adaptive classes are not unmixed. A restoration that leaves the dielectric's DOLP well below
-        its true value (a blind one through strong turbulence) puts much of the paint beyond the
-        fixed priors' threshold; the adaptive classes follow the data.
+        without), so the adaptive classes are not unmixed. A restoration that leaves the
+        dielectric's DOLP well below its true value (a blind one through strong turbulence) puts
+        much of the paint beyond the fixed priors' threshold; the adaptive classes follow the data.
     sigma : float
         Known roughness (per-axis rms facet slope) used by the inversion.
     bias_samples : int
