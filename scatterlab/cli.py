@@ -8,7 +8,8 @@
     scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
     scatterlab analyze DATASET [--out DIR] [--force] [--psf blind|diffraction] [--iterations N]
                      [--classes adaptive|priors] [--bias-samples N] [--model-error] [--frames F]
-                     [--psf-refine none|layout] [--bad-pixels MASK.tif|.npy] [--full-well E]
+                     [--psf-refine none|layout] [--blind-starts K] [--bad-pixels MASK.tif|.npy]
+                     [--full-well E]
     scatterlab fit-mueller FILE.csv [--out DIR] [--wavelength-um W] [--sigma S] [--time-convention exp(-iwt)]
     scatterlab fit-dolp FILE.csv [--out DIR] [--sigma S] [--noise N] [--angle-unit rad]
     scatterlab fit-ellipsometry FILE.csv [--out DIR] [--sigma S] [--time-convention exp(-iwt)]
@@ -220,6 +221,7 @@ def _analyze(args) -> int:
         model_error=args.model_error,
         frames=args.frames,
         psf_refine=args.psf_refine,
+        blind_starts=args.blind_starts,
     )
 
     if args.full_well is not None and not (math.isfinite(args.full_well) and args.full_well > 0):
@@ -840,6 +842,13 @@ def main(argv=None) -> int:
         default="none",
         help="refine each blind PSF with a few-material object (with --frames F > 1: one layout "
         "shared by the frames, whole-field PSFs; tens of times the restoration's cost)",
+    )
+    an.add_argument(
+        "--blind-starts",
+        type=int,
+        default=3,
+        help="random start PSFs per blind restoration, aligned and averaged: the ghosts of a wrong "
+        "PSF estimate average down (default 3; 1 is the text's single start)",
     )
     an.add_argument(
         "--bad-pixels",

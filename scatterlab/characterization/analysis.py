@@ -114,6 +114,10 @@ class AnalyzeSettings:
         scene: PSF L1 from the truth 1.10-1.17 -> 0.78-0.87, classification error 0.054 -> 0.030). The
         self-calibration's re-simulations are restored the same way. Tens of times the cost of a blind
         restoration (``studies/performance/perf_layout_frames.py``).
+    blind_starts : int
+        Random start PSFs per blind restoration, aligned and averaged
+        (:func:`~scatterlab.characterization.restoration.average_starts`); the self-calibration's
+        re-simulations are restored the same way. The time of the blind restorations grows with it.
     """
 
     psf: str = "blind"
@@ -128,6 +132,7 @@ class AnalyzeSettings:
     seed: int = 20101210
     frames: int = 1
     psf_refine: str = "none"
+    blind_starts: int = 3
 
     def validate(self) -> "AnalyzeSettings":
         """Check every option.
@@ -154,6 +159,8 @@ class AnalyzeSettings:
             raise ValueError(f"priors must be one of ch5, ch6, ch7, got {self.priors!r}")
         if not 1 <= self.iterations <= 100000:
             raise ValueError(f"iterations must be in [1, 100000], got {self.iterations}")
+        if not 1 <= self.blind_starts <= 64:
+            raise ValueError(f"blind_starts must be in [1, 64], got {self.blind_starts}")
         if not 1 <= self.bias_samples <= 20:
             raise ValueError(f"bias_samples must be in [1, 20], got {self.bias_samples}")
         if not 1e-3 <= self.sigma <= 1.5:
@@ -226,6 +233,7 @@ def _config(ds, settings):
         iterations=settings.iterations,
         psf_model=settings.psf_model,
         psf_refine=settings.psf_refine,
+        blind_starts=settings.blind_starts,
         priors=settings.priors,
         sigma_known=settings.sigma,
         posterior_steps=settings.posterior_steps,
@@ -318,6 +326,7 @@ def _restore_and_register(acqs, thetas, settings, folder, rng, executor):
         str(folder.checkpoints),
         settings.frames,
         settings.psf_refine,
+        settings.blind_starts,
     )
     ex = executor if executor is not None else get_executor("serial")
     tasks = [(a, rs, int(rng.integers(2**63)), Ideal()) for a in acqs]

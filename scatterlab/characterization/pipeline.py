@@ -193,6 +193,7 @@ def observe(
         True,
         None if checkpoint is None else str(checkpoint),
         psf_refine=cfg.psf_refine,
+        starts=cfg.blind_starts,
     )
     obs, tasks = [], []
     for th in np.asarray(thetas, float):

@@ -44,6 +44,7 @@ __all__ = [
     "signed_dolp",
     "KNOWN_PSF_ITERATIONS",
     "phase_diversity_psf",
+    "average_starts",
 ]
 
 KNOWN_PSF_ITERATIONS = 100
@@ -129,6 +130,12 @@ class RestoreSettings:
         layout shared by the frames, :data:`LAYOUT_FRAMES_ROUNDS` rounds, and the whole field as PSF support
         for the refinement and the final restoration.
         ``"none"``: the blind EM's own estimate.
+    starts : int
+        Random start PSFs of a blind restoration. With more than one, the restorations from each (blind EM,
+        and the layout refinement when asked for) are aligned with the first and their Stokes images
+        averaged (:func:`average_starts`): the ghosts a wrong PSF leaves change place with the start and
+        average down. The PSF, log-likelihood and classification continuation are the first start's.
+        Ignored when the PSF is known.
     """
 
     iterations: int = 150
@@ -138,6 +145,13 @@ class RestoreSettings:
     checkpoint: str | None = None
     frames: int = 1
     psf_refine: str = "none"
+    starts: int = 1
+
+    def __post_init__(self):
+        if isinstance(self.starts, bool) or not isinstance(self.starts, (int, np.integer)):
+            raise ValueError(f"starts must be an integer in [1, 64], got {self.starts!r}")
+        if not 1 <= self.starts <= 64:
+            raise ValueError(f"starts must be an integer in [1, 64], got {self.starts!r}")
 
 
 def signed_dolp(S) -> np.ndarray:
@@ -269,6 +283,7 @@ def _digest(acq: Acquisition, settings: RestoreSettings, ideal: Ideal, seed: int
                 pri,
                 settings.restore_reference,
                 settings.frames,
+                settings.starts,
                 # the refinement's constants too: changing them must not serve stale checkpoints
                 (
                     settings.psf_refine,
@@ -329,27 +344,84 @@ def phase_diversity_psf(acq: Acquisition) -> np.ndarray:
     return fit.psfs[0]
 
 
-def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int):
-    """ML deconvolution, then a short continuation with the priors for the classes (PSF held fixed)."""
-    from scatterlab.deconvolution import blind_deconvolve, initial_psf, object_grid, resample_psf
+def _start_seed(seed: int, k: int) -> int:
+    """Seed of the ``k``-th random start of a blind restoration (the first is ``seed`` itself)."""
+    if k == 0:
+        return int(seed)
+    return int(np.random.SeedSequence([int(seed), k]).generate_state(1, np.uint64)[0] >> 1)
 
-    H, W = acq.counts.shape[1:]
-    diversity = not known_psf and acq.diversity_counts is not None
-    known_psf = known_psf or diversity
-    # a known PSF is used whole (its Airy tail carries a few per cent of the metal's light onto the paint, as
-    # much as the paint's own signal); a blind estimate is confined to a quarter of the field
-    # (the whole H x H square: cutting its corners drops ~0.2 % of the light, 2 % of the paint's S0 under a
-    # metal 25x brighter); a blind estimate is confined to a disc of a quarter of the field
-    radius, pad = (np.sqrt(2) * H / 2, H // 2) if known_psf else (H / 4, int(np.ceil(H / 4)))
-    grid = object_grid((H, W), radius, pad=pad)
+
+def average_starts(s0s, dolps, mask=None):
+    """One restoration from several blind ones: each aligned with the first and their Stokes images averaged.
+
+    A blind PSF estimate is found up to a translation, and its errors leave ghost copies of the object's
+    edges whose places change with the random start (Sec. 5.3.2 starts the EM from a random Kolmogorov PSF).
+    Averaging the linear Stokes images ``S0`` and ``S1 = S0 DOLP`` of restorations from independent starts
+    (each translated onto the first by :func:`~scatterlab.characterization.registration.estimate_shift`)
+    keeps what they agree on and averages their ghosts down: a Monte-Carlo average over the blind estimate's
+    random start. Where a translated start does not cover the field, the others' mean is used.
+
+    Parameters
+    ----------
+    s0s : sequence of ndarray, shape (H, W)
+        Irradiance of each restoration [photo-electrons].
+    dolps : sequence of ndarray, shape (H, W)
+        Their signed DOLP (NaN where undefined, taken as 0).
+    mask : ndarray of bool, shape (H, W), optional
+        Measured pixels (the translations are estimated from these alone).
+
+    Returns
+    -------
+    s0 : ndarray, shape (H, W)
+        Mean irradiance [photo-electrons].
+    dolp : ndarray, shape (H, W)
+        Mean ``S1`` over mean ``S0`` (NaN where the mean ``S0 <= 0``).
+    shifts : ndarray, shape (K, 2)
+        The translation applied to each restoration [pixels]; the first is (0, 0).
+    """
+    from scipy import ndimage
+
+    from scatterlab.characterization.registration import estimate_shift
+
+    if len(s0s) != len(dolps) or not len(s0s):
+        raise ValueError(
+            f"s0s and dolps must be non-empty and of equal length, got {len(s0s)} and {len(dolps)}"
+        )
+    ref = np.asarray(s0s[0], float)
+    shape = ref.shape
+    shifts = np.zeros((len(s0s), 2))
+    weight, s0_sum, s1_sum = np.zeros(shape), np.zeros(shape), np.zeros(shape)
+    for k, (s0, dolp) in enumerate(zip(s0s, dolps)):
+        s0 = np.asarray(s0, float)
+        s1 = s0 * np.nan_to_num(np.asarray(dolp, float), nan=0.0)
+        if k:
+            shifts[k] = estimate_shift(ref, s0, reference_mask=mask, image_mask=mask)
+        # linear interpolation; what is shifted in from beyond the field carries no weight
+        moved = [
+            ndimage.shift(x, shifts[k], order=1, mode="constant", cval=0.0)
+            for x in (np.ones(shape), s0, s1)
+        ]
+        weight += moved[0]
+        s0_sum += moved[1]
+        s1_sum += moved[2]
+    s0_mean = s0_sum / weight  # the first start covers every pixel: weight >= 1
+    s1_mean = s1_sum / weight
+    dolp = np.where(s0_mean > 0, s1_mean / np.where(s0_mean > 0, s0_mean, 1.0), np.nan)
+    return s0_mean, dolp, shifts
+
+
+def _ml_phase(acq: Acquisition, settings: RestoreSettings, kw, grid, mode_of, seed: int):
+    """The maximum-likelihood deconvolution from one start: blind EM (or the known PSF held fixed), and the
+    layout refinement when the settings ask for it."""
+    from scatterlab.deconvolution import blind_deconvolve, initial_psf
+
+    known_psf, diversity, psf_known = mode_of
+    H = acq.counts.shape[1]
     F = settings.frames
-    kw = dict(
-        psf_radius=radius, pad=pad, pupil=acq.pupil, frames=F, mask=acq.valid, censor=acq.full_well
-    )
     if diversity:  # the PSF phase diversity finds, then held fixed
-        psf0, mode = resample_psf(phase_diversity_psf(acq), grid), "fixed"
+        psf0, mode = psf_known, "fixed"
     elif known_psf:  # one known PSF, the same for every frame
-        psf0, mode = resample_psf(acq.psf_true, grid), "fixed"
+        psf0, mode = psf_known, "fixed"
     elif F == 1:
         psf0, mode = initial_psf(acq.pupil, grid, rng=seed), settings.psf_model
     else:  # each frame starts from its own random screen
@@ -365,6 +437,7 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     if not known_psf and settings.psf_refine == "layout":
         from scatterlab.deconvolution import layout_psf
 
+        kw = dict(kw)
         if F == 1:
             refine = dict(materials=3, rounds=LAYOUT_ROUNDS)
         else:  # one layout shared by the frames, whole field (module constants above)
@@ -389,6 +462,44 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
             iterations=LAYOUT_FINAL_ITERATIONS,
             **kw,
         )
+    return ml, kw
+
+
+def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int):
+    """ML deconvolution (averaged over ``settings.starts`` random starts when blind), then a short
+    continuation with the priors for the classes (PSF held fixed)."""
+    from scatterlab.deconvolution import blind_deconvolve, object_grid, resample_psf
+
+    H, W = acq.counts.shape[1:]
+    diversity = not known_psf and acq.diversity_counts is not None
+    known_psf = known_psf or diversity
+    # a known PSF is used whole (its Airy tail carries a few per cent of the metal's light onto the paint, as
+    # much as the paint's own signal; the whole H x H square: cutting its corners drops ~0.2 % of the light,
+    # 2 % of the paint's S0 under a metal 25x brighter); a blind estimate is confined to a disc of a quarter
+    # of the field
+    radius, pad = (np.sqrt(2) * H / 2, H // 2) if known_psf else (H / 4, int(np.ceil(H / 4)))
+    grid = object_grid((H, W), radius, pad=pad)
+    F = settings.frames
+    kw = dict(
+        psf_radius=radius, pad=pad, pupil=acq.pupil, frames=F, mask=acq.valid, censor=acq.full_well
+    )
+    psf_known = None
+    if diversity:
+        psf_known = resample_psf(phase_diversity_psf(acq), grid)
+    elif known_psf:
+        psf_known = resample_psf(acq.psf_true, grid)
+    mode_of = (known_psf, diversity, psf_known)
+    # a known PSF gives the same restoration from any start; a blind one is averaged over its random starts
+    starts = 1 if known_psf else settings.starts
+    runs = [
+        _ml_phase(acq, settings, kw, grid, mode_of, _start_seed(seed, k)) for k in range(starts)
+    ]
+    ml, kw = runs[0]
+    s0, dolp = ml.s0, np.where(ml.s0 > 0, ml.dolp, np.nan)
+    if starts > 1:
+        s0, dolp, _ = average_starts(
+            [r.s0 for r, _ in runs], [r.dolp for r, _ in runs], mask=_measured_pixels(acq)
+        )
     classes, loglik_classes = None, np.zeros(0)
     if settings.priors:
         steps = max(10, settings.iterations // 5)
@@ -399,16 +510,14 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
             psf_mode="fixed",
             iterations=steps,
             priors=settings.priors,
-            s0_start=ml.s0,
-            dolp_start=ml.dolp,
+            s0_start=s0,
+            dolp_start=ml.dolp if starts == 1 else np.nan_to_num(dolp, nan=0.0),
             **kw,
         )
         loglik_classes = cont.loglik
-    dolp = np.where(ml.s0 > 0, ml.dolp, np.nan)
-    if settings.priors:
-        classes = _unmixed(ml.s0, dolp, cont.classes, acq)
+        classes = _unmixed(s0, dolp, cont.classes, acq)
     psf = ml.psfs[0] if F == 1 else ml.psfs
-    return ml.s0, dolp, classes, psf, ml.loglik, loglik_classes
+    return s0, dolp, classes, psf, ml.loglik, loglik_classes
 
 
 def restore(

@@ -17,6 +17,9 @@ psf_model = "pupil"                   # PSF update: "pupil" (Schulz, GS steps) o
 psf_refine = "none"                   # "layout": refine each blind PSF with a few-material object
                                       # (scatterlab.deconvolution.layout_psf), then restore with it known;
                                       # about 10x the time of a blind restoration
+blind_starts = 3                      # random start PSFs per blind restoration, aligned and averaged: the
+                                      # ghosts of a wrong PSF estimate change place with the start and
+                                      # average down (1: one start, as Sec. 5.3.2); the time grows with it
 phase_diversity_waves = 0.0           # > 0: two unpolarized cameras defocused by +/- this many waves (peak
                                       # to valley; or a list, one per d_over_r0, 0 for none at that strength)
                                       # record each turbulent exposure, and the PSF is found by
@@ -115,6 +118,7 @@ class SceneConfig:
     iterations: int = 150
     psf_model: str = "pupil"
     psf_refine: str = "none"
+    blind_starts: int = 3
     phase_diversity_waves: float | list = 0.0
     phase_diversity_share: float = 0.3333
     priors: str = "ch7"
@@ -250,6 +254,8 @@ def _check_ranges(cfg: SceneConfig) -> None:
     if not all(math.isfinite(w) and 0 <= w <= 10 for w in np.atleast_1d(waves)):
         raise ValueError(f"phase_diversity_waves must be in [0, 10] waves, got {waves!r}")
     _finite(cfg, "phase_diversity_share", 0, 0.9, lo_open=True)
+    if not 1 <= cfg.blind_starts <= 64:
+        raise ValueError(f"blind_starts must be in [1, 64], got {cfg.blind_starts}")
     if not 1 <= cfg.iterations <= 100000:
         raise ValueError(f"iterations must be in [1, 100000], got {cfg.iterations}")
     if not 100 <= cfg.posterior_steps <= 10**6:

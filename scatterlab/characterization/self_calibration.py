@@ -203,7 +203,14 @@ def _resimulate_task(task):
     else:
         acq = _multi_frame_acquisition(args, cfg, psf)
     settings = RestoreSettings(
-        cfg.iterations, cfg.psf_model, None, True, None, frames, cfg.psf_refine
+        cfg.iterations,
+        cfg.psf_model,
+        None,
+        True,
+        None,
+        frames,
+        cfg.psf_refine,
+        cfg.blind_starts,
     )
     rest = restore(acq, settings, seed, Ideal(psf=not blind))
     # a blind restoration through a new screen is shifted by its tilt: aligned with the synthetic object, as

@@ -148,6 +148,8 @@ def test_a_run_killed_at_any_stage_finishes_on_a_plain_rerun(
         ("[[plates]]\nmetal_roughness = 0.0\n", "metal_roughness"),
         ('[[plates]]\nmetal_kappa = "x"\n', "metal_kappa"),
         ('psf_refine = "kmeans"\n', "psf_refine"),
+        ("blind_starts = 0\n", "blind_starts"),
+        ("blind_starts = 2.5\n", "blind_starts"),
     ],
 )
 def test_scene_errors_name_the_key_before_anything_runs(tmp_path, text, key):
