@@ -11,10 +11,12 @@ alone is ideal. Full mode (128 px at plate zoom 4, 7 geometries, D/r0 7.9 and 12
 plate): 594 s on 2 cores shared with a test run (27 Nov 2026); 74 minutes once, with two other jobs.
 
 Last full run (seed 20101210, 27 Nov 2026, with the registration over the fields' overlap and the classes
-refined by linear unmixing): for the corrected images the largest source of every error is the blind PSF
-estimate. With the true PSF the class error vs labels falls from 0.028 to 0.008 (D/r0 7.9) and from 0.034 to
-0.018 (12.9), the DOLP RMSE from 0.236 to 0.198 and from 0.285 to 0.238, and the paint's |eta error| from
-0.216 to 0.126 and from 0.503 to 0.299. Perfect registration changes nothing any more (0.028 and 0.034).
+refined by linear unmixing, and one blind start: the scene default has been three since 28 Nov 2026, which
+lowers the corrected S0 error and leaves the classification within 0.003): for the corrected images the
+largest source of every error is the blind PSF estimate. With the true PSF the class error vs labels falls
+from 0.028 to 0.008 (D/r0 7.9) and from 0.034 to 0.018 (12.9), the DOLP RMSE from 0.236 to 0.198 and from
+0.285 to 0.238, and the paint's |eta error| from 0.216 to 0.126 and from 0.503 to 0.299. Perfect registration
+changes nothing any more (0.028 and 0.034).
 The run before, with the circular registration and DOLP classes, had the class error at 0.105 and 0.137, the
 largest part of it the optics' blur (0.026 without it). For the restored no-turbulence image, what the
 known-PSF restoration leaves of the halo (DOLP RMSE 0.091 -> 0.052; the paint's region index is already

@@ -9,12 +9,12 @@ Like for like: the text's 250 deconvolution iterations (full mode; quick 30), ro
 known to the inversion, the same value table5_synthetic uses (deviation: the text's samples have
 sigma < 1 deg, measured from the specular lobe width). The text's central result is compared as a
 number: the paint's per-pixel scatter (sd of n) shrinks 2.0-4.2x from degraded to corrected; so are
-the metals' mean kappa under turbulence. Run time: quick (48 px, 3 angles, 30 iterations) 45 s
-measured at load ~3.7 on the shared 2-core machine; full (128 px, 7 angles, 250 iterations): 186 s wall
-with ``--workers 2`` at a load average of about 2 (24 Nov 2026; the estimate of over an hour from the
-quick work was wrong), verdict "partly": the paint's scatter of n shrinks 1.1x, 0.5x, 2.3x and 2.2x
-(2 of 4 cases reach the text's 2x), and the corrected metals' mean kappa is 3-80 % below the
-published values.
+the metals' mean kappa under turbulence. Run time: quick (48 px, 3 angles, 30 iterations) 45 s measured at
+load ~3.7 on the shared 2-core machine; full (128 px, 7 angles, 250 iterations): 186 s wall with
+``--workers 2`` at a load average of about 2 (24 Nov 2026, one blind start: the scene default is three
+since 28 Nov 2026; the estimate of over an hour from the quick work was wrong), verdict "partly": the
+paint's scatter of n shrinks 1.1x, 0.5x, 2.3x and 2.2x (2 of 4 cases reach the text's 2x), and the
+corrected metals' mean kappa is 3-80 % below the published values.
 """
 
 import numpy as np

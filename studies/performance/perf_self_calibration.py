@@ -13,7 +13,8 @@ the same run, is the former bootstrap: a plate estimated from the turbulent data
 Full mode: 8 scenes, 4 geometries (30-60 deg), 40 EM iterations, R = 1, 2, 4, 8; quick mode: 1 scene, 2
 geometries, 20 iterations, R = 1, 2, 4 (recorded, not judged).
 
-Full-mode run of 24 Nov 2026 (seed 20101210, 2 workers, 74 s wall on the 2-core machine): uncorrected, the
+Full-mode run of 24 Nov 2026 (seed 20101210, 2 workers, 74 s wall on the 2-core machine; one blind start per
+restoration, the scene default until 28 Nov 2026, now three): uncorrected, the
 paint is 0.42 low (relative). With the reference plate the corrected mean is +0.04 off at every R (rms 0.135,
 0.138, 0.139, 0.124 for R = 1, 2, 4, 8): the accuracy is set by the data's own turbulence draw, which more
 replicates cannot remove. What R buys is the error estimate: rms z 0.99, 0.79 and 0.83 for R = 2, 4, 8
