@@ -418,9 +418,9 @@ def _ml_phase(acq: Acquisition, settings: RestoreSettings, kw, grid, mode_of, se
     known_psf, diversity, psf_known = mode_of
     H = acq.counts.shape[1]
     F = settings.frames
-    if diversity:  # the PSF phase diversity finds, then held fixed
-        psf0, mode = psf_known, "fixed"
-    elif known_psf:  # one known PSF, the same for every frame
+    if (
+        known_psf
+    ):  # the true PSF or the one phase diversity finds, the same for every frame, held fixed
         psf0, mode = psf_known, "fixed"
     elif F == 1:
         psf0, mode = initial_psf(acq.pupil, grid, rng=seed), settings.psf_model
