@@ -87,6 +87,13 @@ class RegionData:
         a calibrated region uses the covariance
         :math:`\mathrm{diag}(e^2 - c^2) + c\,c^\mathsf{T}`; any other region the same with an
         inferred noise added to the diagonal.
+    trend : ndarray, shape (M,), or None
+        A second error of the whole series, one that changes sign across it (signed, [DOLP]; also part of
+        ``error``): a fraction of a ratio correction times each geometry's place in the series
+        (:func:`~scatterlab.characterization.self_calibration.series_position`), for the restoration's
+        dilution of a paint mis-estimated more at one end of the angles than at the other. A calibrated
+        region's covariance is then :math:`\mathrm{diag}(e^2 - c^2 - t^2) + c\,c^\mathsf{T} +
+        t\,t^\mathsf{T}`.
     """
 
     name: str
@@ -101,6 +108,7 @@ class RegionData:
     edge_shift: np.ndarray | None = None
     calibrated: bool = False
     correlated: np.ndarray | None = None
+    trend: np.ndarray | None = None
 
 
 @dataclass
@@ -369,12 +377,13 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
 
 def _covariance(region: RegionData, error) -> np.ndarray:
     """Error covariance (M, M) of a calibrated region's means [DOLP^2] whose total error per geometry is
-    ``error`` (M,): independent per geometry, plus its :attr:`RegionData.correlated` part shared by the
-    whole series, plus the noise floor."""
+    ``error`` (M,): independent per geometry, plus its :attr:`RegionData.correlated` and
+    :attr:`RegionData.trend` parts shared by the whole series, plus the noise floor."""
     error = np.asarray(error, float)
     c = np.zeros_like(error) if region.correlated is None else np.asarray(region.correlated)
-    independent = np.maximum(error**2 - c**2, 0.0) + NOISE_FLOOR**2
-    return np.diag(independent) + np.outer(c, c)
+    t = np.zeros_like(error) if region.trend is None else np.asarray(region.trend, float)
+    independent = np.maximum(error**2 - c**2 - t**2, 0.0) + NOISE_FLOOR**2
+    return np.diag(independent) + np.outer(c, c) + np.outer(t, t)
 
 
 def _common(region: RegionData) -> np.ndarray:

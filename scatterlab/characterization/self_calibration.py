@@ -66,7 +66,13 @@ from scatterlab.characterization.registration import register_restoration
 from scatterlab.characterization.restoration import RestoreSettings, restore
 from scatterlab.characterization.scene_config import Plate
 
-__all__ = ["BiasEstimate", "estimated_plate", "restoration_bias", "bias_corrected"]
+__all__ = [
+    "BiasEstimate",
+    "estimated_plate",
+    "restoration_bias",
+    "bias_corrected",
+    "series_position",
+]
 
 # of the re-simulated bias, kept as a systematic error after subtracting it (the re-simulated scene is an
 # estimate of the true one)
@@ -91,6 +97,12 @@ BLIND_RATIO_CORRELATED_FRACTION = 0.8
 # part common to the geometries was 0.14 of the correction (rms) at D/r0 7.9 and 12.9, and with 0.15 the
 # DOLP residuals had rms z 0.97 and 1.00 (seed 1 verified it: module docstring)
 REFERENCE_RATIO_COMMON_FRACTION = 0.15
+# and kept as a second error of the whole series that changes sign across it (the fraction of the correction
+# times the geometry's place in the series, -1 at the smallest angle, +1 at the largest): the residual of the
+# same corrected paints projected on that pattern was 0.21 and 0.15 of the correction (rms) at D/r0 7.9 and
+# 12.9 on seed 20101210, 0.14 and 0.13 on seed 1. Without it the paint's n, which the DOLP's change with angle
+# sets, had standardised errors of rms 1.3-1.4 (module docstring)
+REFERENCE_RATIO_TREND_FRACTION = 0.15
 # passes of a bootstrap without a reference plate (each re-estimates it from the last correction)
 CALIBRATION_PASSES = 2
 RATIO_MIN_DOLP = (
@@ -123,6 +135,12 @@ class BiasEstimate:
     common : float
         Fraction of a ratio correction kept as one error of the whole geometry series
         (:attr:`~scatterlab.characterization.estimation.RegionData.correlated`).
+    trend : float
+        Fraction of a ratio correction kept as an error of the whole series that changes sign across it
+        (:attr:`~scatterlab.characterization.estimation.RegionData.trend`), with :attr:`position`.
+    position : ndarray, shape (M,), or None
+        Each geometry's place in the series, -1 at the smallest angle to +1 at the largest
+        (:func:`series_position`).
     measured : bool
         The replicates re-simulated a reference plate, so their spread is the full noise of the region mean
         as the restoration leaves it: it replaces the data's pixel-scatter and edge terms, and the corrected
@@ -137,6 +155,8 @@ class BiasEstimate:
     fraction: float = SYSTEMATIC_FRACTION
     common: float = BLIND_RATIO_CORRELATED_FRACTION
     measured: bool = False
+    trend: float = 0.0
+    position: np.ndarray | None = None
 
     def draw(self) -> np.ndarray | float:
         """The data's own draw from the replicates' spread [DOLP]: :math:`s \\sqrt{1 + 1/R}` (0 for one
@@ -147,6 +167,26 @@ class BiasEstimate:
         """Error left after subtracting :attr:`mean` [DOLP], shape (M,): the scene-mismatch fraction of the
         bias and, for a bootstrap, the data's own draw from the replicates' spread."""
         return np.hypot(self.fraction * np.abs(self.mean), self.draw())
+
+
+def series_position(thetas) -> np.ndarray:
+    """Each geometry's place in its series: -1 at the smallest angle, +1 at the largest, linear in angle.
+
+    Parameters
+    ----------
+    thetas : array_like, shape (M,)
+        Specular angles [rad], in any order.
+
+    Returns
+    -------
+    ndarray, shape (M,)
+        In [-1, 1]; zeros when all angles are equal (a single geometry).
+    """
+    t = np.asarray(thetas, float)
+    half = (t.max() - t.min()) / 2 if t.size else 0.0
+    if half <= 0:
+        return np.zeros_like(t)
+    return (t - (t.max() + t.min()) / 2) / half
 
 
 def estimated_plate(regions, thetas, sigma) -> Plate:
@@ -353,7 +393,14 @@ def restoration_bias(
         # geometry for a ratio, a smaller common one (module docstring). One replicate has no spread, so
         # it measures no noise: its correction keeps the data's own error terms and the wider fractions
         bias = {
-            k: replace(b, fraction=0.0, common=REFERENCE_RATIO_COMMON_FRACTION, measured=True)
+            k: replace(
+                b,
+                fraction=0.0,
+                common=REFERENCE_RATIO_COMMON_FRACTION,
+                measured=True,
+                trend=REFERENCE_RATIO_TREND_FRACTION,
+                position=series_position(thetas),
+            )
             if b.ratio is not None
             else b
             for k, b in bias.items()
@@ -450,18 +497,23 @@ def bias_corrected(region: RegionData, bias) -> RegionData:
         subtracted = equivalent.mean
         correlated = bias.common * subtracted
         if bias.measured:
-            # the replicates of the reference plate measured the corrected mean's noise in full
+            # the replicates of the reference plate measured the corrected mean's noise in full; what the
+            # reference plate and layout get wrong is left, as a level and a trend over the series
             draw = np.broadcast_to(equivalent.draw(), region.mean.shape).astype(float)
+            trend = None
+            if bias.trend and bias.position is not None:
+                trend = bias.trend * subtracted * np.asarray(bias.position, float)
             return replace(
                 region,
                 mean=np.clip(corrected, 0.0, 1.0),
-                error=np.sqrt(draw**2 + correlated**2),
+                error=np.sqrt(draw**2 + correlated**2 + (0.0 if trend is None else trend**2)),
                 statistical=draw,
                 edge=np.zeros_like(draw),
                 bias=subtracted,
                 bias_spread=bias.spread,
                 calibrated=True,
                 correlated=correlated,
+                trend=trend,
             )
     else:
         sys_err = bias.systematic()

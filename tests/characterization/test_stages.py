@@ -428,6 +428,15 @@ def test_a_calibrated_region_gets_its_measured_covariance_and_no_inferred_noise(
     assert fixed["noise"] is None
     want = np.diag(err**2 - c**2 + NOISE_FLOOR**2) + np.outer(c, c)
     np.testing.assert_allclose(fixed["covariance"][0], want, rtol=1e-12)
+    # a trend over the series is its own rank-one part, taken out of the diagonal like c
+    calls.clear()
+    t = np.array([-0.0015, -0.0005, 0.0005, 0.0015])
+    trended = RegionData(
+        "paint", np.full(4, 0.5), err, err, 0 * err, 100, calibrated=True, correlated=c, trend=t
+    )
+    region_posteriors([trended], th, 0.3, np.random.default_rng(0))
+    want = np.diag(err**2 - c**2 - t**2 + NOISE_FLOOR**2) + np.outer(c, c) + np.outer(t, t)
+    np.testing.assert_allclose(calls[0]["covariance"][0], want, rtol=1e-12)
     np.testing.assert_allclose(np.sqrt(np.diag(fixed["covariance"][0])), np.hypot(err, NOISE_FLOOR))
 
 
@@ -587,6 +596,7 @@ def test_a_bootstrap_on_a_reference_plate_re_simulates_that_plate_once():
     from scatterlab.characterization.estimation import RegionData
     from scatterlab.characterization.self_calibration import (
         REFERENCE_RATIO_COMMON_FRACTION,
+        REFERENCE_RATIO_TREND_FRACTION,
         bias_corrected,
         restoration_bias,
     )
@@ -644,8 +654,12 @@ def test_a_bootstrap_on_a_reference_plate_re_simulates_that_plate_once():
     draw = paint.spread / 0.6 * np.sqrt(1 + 1 / 4)
     np.testing.assert_allclose(c.mean, regions[0].mean / 0.6)
     np.testing.assert_allclose(c.correlated, REFERENCE_RATIO_COMMON_FRACTION * shift)
+    # and REFERENCE_RATIO_TREND_FRACTION of it as a series-wide error that changes sign across the angles
+    # (30 deg at -1, 50 deg at +1)
+    trend = REFERENCE_RATIO_TREND_FRACTION * shift * np.array([-1.0, 1.0])
+    np.testing.assert_allclose(c.trend, trend)
     np.testing.assert_allclose(
-        c.error, np.sqrt(draw**2 + (REFERENCE_RATIO_COMMON_FRACTION * shift) ** 2)
+        c.error, np.sqrt(draw**2 + (REFERENCE_RATIO_COMMON_FRACTION * shift) ** 2 + trend**2)
     )
     assert c.calibrated and np.all(c.edge == 0)
     # the metal's difference keeps the data's own error terms and the inferred noise
@@ -657,6 +671,7 @@ def test_a_bootstrap_on_a_reference_plate_re_simulates_that_plate_once():
     assert len(seen) == 2  # one pass of one replicate per geometry
     c1 = bias_corrected(regions[0], one)
     assert not one.measured and not c1.calibrated and np.all(c1.error > regions[0].error / 0.6)
+    assert one.trend == 0 and c1.trend is None
 
 
 def test_report_prints_enough_decimals_to_show_a_miss():
