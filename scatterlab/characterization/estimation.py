@@ -83,7 +83,9 @@ class RegionData:
         posterior then infers no further noise.
     correlated : ndarray, shape (M,), or None
         The part of ``error`` that is one error of the whole geometry series (signed, [DOLP]): a
-        fraction of the subtracted bias, which the scene mismatch scales as a whole. The posterior of
+        fraction of the subtracted bias, which the scene mismatch scales as a whole (for a paint's ratio
+        correction on a reference plate, with the part of its :attr:`trend` that goes with it, so that it
+        grows toward the small angles). The posterior of
         a calibrated region uses the covariance
         :math:`\mathrm{diag}(e^2 - c^2) + c\,c^\mathsf{T}`; any other region the same with an
         inferred noise added to the diagonal.
@@ -91,7 +93,8 @@ class RegionData:
         A second error of the whole series, one that changes sign across it (signed, [DOLP]; also part of
         ``error``): a fraction of a ratio correction times each geometry's place in the series
         (:func:`~scatterlab.characterization.self_calibration.series_position`), for the restoration's
-        dilution of a paint mis-estimated more at one end of the angles than at the other. A calibrated
+        dilution of a paint mis-estimated more at one end of the angles than at the other (the part of it
+        independent of :attr:`correlated`). A calibrated
         region's covariance is then :math:`\mathrm{diag}(e^2 - c^2 - t^2) + c\,c^\mathsf{T} +
         t\,t^\mathsf{T}`.
     """

@@ -13,6 +13,7 @@ import pytest
 
 from scatterlab.characterization.estimation import RegionData, _covariance
 from scatterlab.characterization.self_calibration import (
+    REFERENCE_RATIO_TREND_CORRELATION,
     BiasEstimate,
     bias_corrected,
     series_position,
@@ -47,6 +48,7 @@ def _measured_paint(truth, ratio, spread, trend):
         measured=True,
         trend=trend,
         position=series_position(THETAS),
+        trend_correlation=REFERENCE_RATIO_TREND_CORRELATION,
     )
     return bias_corrected(region, bias)
 
@@ -56,14 +58,16 @@ def test_a_tilted_series_is_covered_only_when_the_trend_is_modelled(with_trend):
     """2000 data sets drawn with independent errors, a level error and a tilt of the sizes the corrected
     region states (a paint restored at 0.93 of its DOLP: errors 0.007-0.015, where the Laplace
     approximation holds): the standard errors of n from the covariance with the trend standardise the n
-    errors to rms 1 (0.9-1.1); dropping the trend from the model leaves them at rms > 1.3 (1.42)."""
+    errors to rms 1 (0.9-1.1; 0.97); the error model without the trend (the level alone) leaves them at
+    rms > 1.3 (1.78)."""
     truth = Model(SIGMA).dolp(PAINT[0] - 1j * PAINT[1], THETAS, THETAS, np.pi)
     region = _measured_paint(truth, ratio=0.93, spread=0.004, trend=0.15)
     assert region.calibrated and region.trend is not None
     C_true = _covariance(region, region.error)
-    model = region if with_trend else RegionData(**{**region.__dict__, "trend": None})
-    # the model without the trend keeps the same per-geometry error (the trend's share on the diagonal)
-    C_model = _covariance(model, region.error)
+    # the model without the trend is the error model before it: the level error alone
+    model = region if with_trend else _measured_paint(truth, ratio=0.93, spread=0.004, trend=0.0)
+    assert with_trend or model.trend is None
+    C_model = _covariance(model, model.error)
     rng = np.random.default_rng(5)
     y = truth + rng.multivariate_normal(np.zeros(4), C_true, size=2000)
     with warnings.catch_warnings():

@@ -596,6 +596,7 @@ def test_a_bootstrap_on_a_reference_plate_re_simulates_that_plate_once():
     from scatterlab.characterization.estimation import RegionData
     from scatterlab.characterization.self_calibration import (
         REFERENCE_RATIO_COMMON_FRACTION,
+        REFERENCE_RATIO_TREND_CORRELATION,
         REFERENCE_RATIO_TREND_FRACTION,
         bias_corrected,
         restoration_bias,
@@ -653,14 +654,22 @@ def test_a_bootstrap_on_a_reference_plate_re_simulates_that_plate_once():
     shift = regions[0].mean - regions[0].mean / 0.6
     draw = paint.spread / 0.6 * np.sqrt(1 + 1 / 4)
     np.testing.assert_allclose(c.mean, regions[0].mean / 0.6)
-    np.testing.assert_allclose(c.correlated, REFERENCE_RATIO_COMMON_FRACTION * shift)
     # and REFERENCE_RATIO_TREND_FRACTION of it as a series-wide error that changes sign across the angles
-    # (30 deg at -1, 50 deg at +1)
-    trend = REFERENCE_RATIO_TREND_FRACTION * shift * np.array([-1.0, 1.0])
-    np.testing.assert_allclose(c.trend, trend)
-    np.testing.assert_allclose(
-        c.error, np.sqrt(draw**2 + (REFERENCE_RATIO_COMMON_FRACTION * shift) ** 2 + trend**2)
+    # (30 deg at x = -1, 50 deg at +1), correlated with the level at rho: two independent modes
+    x, rho = np.array([-1.0, 1.0]), REFERENCE_RATIO_TREND_CORRELATION
+    level = REFERENCE_RATIO_COMMON_FRACTION * shift
+    trend = REFERENCE_RATIO_TREND_FRACTION * shift * x
+    np.testing.assert_allclose(c.correlated, level + rho * trend)
+    np.testing.assert_allclose(c.trend, np.sqrt(1 - rho**2) * trend)
+    # their covariance is that of a level and a trend correlated at rho
+    C = np.outer(c.correlated, c.correlated) + np.outer(c.trend, c.trend)
+    want = (
+        np.outer(level, level)
+        + np.outer(trend, trend)
+        + rho * (np.outer(level, trend) + np.outer(trend, level))
     )
+    np.testing.assert_allclose(C, want, atol=1e-15)
+    np.testing.assert_allclose(c.error, np.sqrt(draw**2 + np.diag(want)))
     assert c.calibrated and np.all(c.edge == 0)
     # the metal's difference keeps the data's own error terms and the inferred noise
     m = bias_corrected(regions[1], bias["metal"])
