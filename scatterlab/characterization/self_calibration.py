@@ -172,6 +172,24 @@ class BiasEstimate:
     position: np.ndarray | None = None
     trend_correlation: float = 0.0
 
+    def __post_init__(self):
+        # a correlation beyond [-1, 1] makes the trend's independent part sqrt(1 - rho^2) NaN, a negative
+        # fraction a negative error: refused here, where they are set, not later inside a posterior
+        if not (isinstance(self.replicates, (int, np.integer)) and self.replicates >= 1):
+            raise ValueError(f"replicates must be an integer >= 1, got {self.replicates!r}")
+        for name in ("fraction", "common", "trend"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be a finite fraction >= 0, got {v!r}")
+        if not (np.isfinite(self.trend_correlation) and -1.0 <= self.trend_correlation <= 1.0):
+            raise ValueError(
+                f"trend_correlation must be in [-1, 1], got {self.trend_correlation!r}"
+            )
+        if self.position is not None and np.shape(self.position) != np.shape(self.mean):
+            raise ValueError(
+                f"position must have the shape of mean {np.shape(self.mean)}, got {np.shape(self.position)}"
+            )
+
     def draw(self) -> np.ndarray | float:
         """The data's own draw from the replicates' spread [DOLP]: :math:`s \\sqrt{1 + 1/R}` (0 for one
         replicate, which has no spread)."""

@@ -81,3 +81,49 @@ def test_a_tilted_series_is_covered_only_when_the_trend_is_modelled(with_trend):
         assert 0.9 < rms < 1.1, rms
     else:
         assert rms > 1.3, rms
+
+
+@pytest.mark.parametrize(
+    "kw, name",
+    [
+        ({"trend_correlation": 1.5}, "trend_correlation"),
+        ({"trend_correlation": -1.01}, "trend_correlation"),
+        ({"trend_correlation": float("nan")}, "trend_correlation"),
+        ({"trend": -0.1}, "trend"),
+        ({"common": float("inf")}, "common"),
+        ({"fraction": -0.5}, "fraction"),
+        ({"replicates": 0}, "replicates"),
+        ({"replicates": 2.5}, "replicates"),
+        ({"position": np.zeros(3)}, "position"),
+    ],
+)
+def test_a_bias_estimate_refuses_what_would_make_its_error_nan_or_negative(kw, name):
+    """A correlation beyond [-1, 1] would make the trend's independent part sqrt(1 - rho^2) NaN inside the
+    posterior; the error is named where it is set."""
+    with pytest.raises(ValueError, match=name):
+        BiasEstimate(np.zeros(4), np.zeros(4), **kw)
+
+
+def test_a_perfectly_correlated_trend_is_all_level():
+    """At rho = +-1 the trend's independent mode vanishes (no NaN): the whole trend rides on the level."""
+    truth = Model(SIGMA).dolp(PAINT[0] - 1j * PAINT[1], THETAS, THETAS, np.pi)
+    observed = 0.9 * truth
+    region = RegionData("paint", observed, np.full(4, 0.01), np.full(4, 0.01), np.zeros(4), 200)
+    for rho in (-1.0, 1.0):
+        bias = BiasEstimate(
+            observed - truth,
+            np.full(4, 0.004),
+            4,
+            ratio=np.full(4, 0.9),
+            fraction=0.0,
+            common=0.15,
+            measured=True,
+            trend=0.15,
+            position=series_position(THETAS),
+            trend_correlation=rho,
+        )
+        c = bias_corrected(region, bias)
+        np.testing.assert_allclose(c.trend, 0.0, atol=1e-15)
+        x, b = series_position(THETAS), c.bias
+        np.testing.assert_allclose(c.correlated, 0.15 * b + rho * 0.15 * b * x)
+        assert np.all(np.isfinite(c.error))
