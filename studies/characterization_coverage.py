@@ -9,6 +9,8 @@ each region's posterior (paint, metal) says whether its 68 % and 95 % intervals 
 is compared with the nominal rate within two binomial standard errors of N trials; a family outside them is
 marked over-covering (conservative) or under-covering (over-confident), beside its median 68 % width. Full
 mode: 24 seeds, about 24 minutes on 2 cores; quick mode: 2 seeds (the rates are recorded, not judged).
+``studies/characterization_coverage_held_out.py`` runs the same trials on a scene these fractions were not
+calibrated on (:func:`run_coverage` with other angles and D/r0).
 
 Each posterior also says how far the data determine each parameter (posterior contraction, 1 - var_post
 / var_prior) and whether the truth lies in the joint (n, kappa) likelihood-ratio region
@@ -150,15 +152,22 @@ METALS = {
     "gold": (0.52, 10.7),
     "titanium": (3.69, 4.59),
 }
-KINDS = ("no_turbulence", "D_r0_7.9_corrected", "D_r0_12.9_corrected")
+GEOMETRY_DEG = [30, 40, 50, 60]  # the scene the error model's fractions were calibrated on
+D_OVER_R0 = [7.9, 12.9]
 LEVELS = {"ci68": 0.68, "ci95": 0.95}
 MIN_JUDGED = 10  # fewer judged trials than this leave a family's coverage unjudged
 
 
-def scene(quick: bool):
-    """The small scene of the study (one plate, set per seed)."""
+def kinds(d_over_r0) -> tuple:
+    """The judged images of a scene: the restored no-turbulence image and each D/r0's corrected image."""
+    return ("no_turbulence",) + tuple(f"D_r0_{x:g}_corrected" for x in d_over_r0)
+
+
+def scene(quick: bool, geometry_deg=GEOMETRY_DEG, d_over_r0=D_OVER_R0):
+    """The small scene of the study (one plate, set per seed): 64 px, the given specular angles [deg] and
+    turbulence strengths."""
     cfg = default_scene()
-    cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = 64, [30, 40, 50, 60], [7.9, 12.9]
+    cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = 64, list(geometry_deg), list(d_over_r0)
     cfg.iterations, cfg.posterior_steps = (10, 300) if quick else (40, 1500)
     cfg.estimate = ["posterior"]
     return cfg
@@ -166,18 +175,18 @@ def scene(quick: bool):
 
 def _trial(task):
     """One seed: draw a plate, run the pipeline, return coverage flags per image, region and parameter."""
-    seed, quick = task
+    seed, quick, geometry_deg, d_over_r0 = task
     rng = np.random.default_rng(seed)
     name = list(METALS)[rng.integers(len(METALS))]
     mn, mk = METALS[name]
     plate = Plate(name, mn, mk, float(rng.uniform(1.3, 1.7)), float(rng.uniform(0.05, 0.6)))
-    cfg = scene(quick)
+    cfg = scene(quick, geometry_deg, d_over_r0)
     cfg.seed = int(seed)
     cfg.plates = [plate]
     res = run_plate(plate, cfg, rng)
     out = {"metal": name, "paint": [plate.paint_n, plate.paint_kappa]}
     true_dolp = _true_region_dolp(res)
-    for key in KINDS:
+    for key in kinds(d_over_r0):
         for region in ("paint", name):
             post = res.metrics[key][f"posterior_{region}"]
             for q in ("n", "kappa"):
@@ -289,10 +298,32 @@ def metal_coverage(trials) -> dict:
 
 
 def run(ctx):
-    n_seeds = 2 if ctx.quick else 24
+    run_coverage(ctx, GEOMETRY_DEG, D_OVER_R0)
+
+
+def run_coverage(ctx, geometry_deg, d_over_r0, n_seeds=None):
+    """The coverage trials of one scene (specular angles [deg], D/r0 list), their table, verdict and figure.
+
+    Parameters
+    ----------
+    ctx : StudyContext
+    geometry_deg : list of float
+        Specular angles of the scene [deg].
+    d_over_r0 : list of float
+        Turbulence strengths (a no-turbulence image is always included).
+    n_seeds : int, optional
+        Trials; default 24 (2 in quick mode).
+
+    Returns
+    -------
+    None
+    """
+    n_seeds = n_seeds or (2 if ctx.quick else 24)
     seeds = [int(s) for s in np.random.SeedSequence(ctx.seed).generate_state(n_seeds)]
+    ctx.metrics["scene"] = {"geometry_deg": list(geometry_deg), "d_over_r0": list(d_over_r0)}
     with ctx.step("trials"):
-        trials = ctx.executor.map(_trial, [(s, ctx.quick) for s in seeds], desc="coverage trials")
+        tasks = [(s, ctx.quick, list(geometry_deg), list(d_over_r0)) for s in seeds]
+        trials = ctx.executor.map(_trial, tasks, desc="coverage trials")
     cov = coverage(trials)
     ctx.metrics["seeds"] = n_seeds
     ctx.metrics["coverage"] = cov
