@@ -16,13 +16,14 @@ corrected images the largest source of the classification error is still the bli
 PSF the class error vs labels falls from 0.031 to 0.008 (D/r0 7.9) and from 0.032 to 0.018 (12.9), the DOLP RMSE
 from 0.234 to 0.198 and from 0.278 to 0.238, and the paint's |eta error| from 0.205 to 0.126 and from 0.481 to
 0.299. The paint's |eta error| at D/r0 7.9 falls further without foreshortening (0.205 to 0.060): there the
-keystone resampling (the plate's height down to cos 60 deg = 0.5) costs more than the PSF estimate; at 12.9 it
-does not (0.404). At D/r0 12.9 the DOLP RMSE falls as far without optics as with the true PSF (0.278 to 0.237).
-Perfect registration changes nothing (0.031 and 0.032). The run with one blind start (27 Nov 2026) had 0.028 and
-0.034, 0.236 and 0.285, 0.216 and 0.503: three starts change these region-level numbers by less than their
-scatter between variants (their effect on the maps' ghosts is measured by ``perf_blind_starts``). The metal's
-|eta error| of its region mean jumps between 3.3 and 13.8 across variants that do not touch it (a DOLP of
-0.003-0.016 fixes aluminium's n and kappa only along a ridge), so no stage is ranked by it.
+foreshortening -- the plate's features squeezed to cos 60 deg = 0.5 of their height against the same PSF, then
+resampled back (this ideal removes both) -- costs more than the PSF estimate; at 12.9 it does not (0.404). At
+D/r0 12.9 the DOLP RMSE falls as far without optics as with the true PSF (0.278 to 0.237). Perfect registration
+changes nothing (0.031 and 0.032). The run with one blind start (27 Nov 2026) had 0.028 and 0.034, 0.236 and
+0.285, 0.216 and 0.503: three starts change these region-level numbers by less than their scatter between
+variants (their effect on the maps' ghosts is measured by ``perf_blind_starts``). The metal's |eta error| of its
+region mean jumps between 3.3 and 13.8 across variants that do not touch it (a DOLP of 0.003-0.016 fixes
+aluminium's n and kappa only along a ridge), so no stage is ranked by it.
 The run before, with the circular registration and DOLP classes, had the class error at 0.105 and 0.137, the
 largest part of it the optics' blur (0.026 without it). For the restored no-turbulence image, what the
 known-PSF restoration leaves of the halo (DOLP RMSE 0.091 -> 0.052; the paint's region index is already
