@@ -138,6 +138,7 @@ import numpy as np
 
 from scatterlab.characterization import Plate, default_scene, run_plate
 from scatterlab.characterization.estimation import DETERMINED_CONTRACTION
+from scatterlab.characterization.pipeline import cases_of
 
 STUDY = {
     "id": "characterization_coverage",
@@ -156,11 +157,6 @@ GEOMETRY_DEG = [30, 40, 50, 60]  # the scene the error model's fractions were ca
 D_OVER_R0 = [7.9, 12.9]
 LEVELS = {"ci68": 0.68, "ci95": 0.95}
 MIN_JUDGED = 10  # fewer judged trials than this leave a family's coverage unjudged
-
-
-def kinds(d_over_r0) -> tuple:
-    """The judged images of a scene: the restored no-turbulence image and each D/r0's corrected image."""
-    return ("no_turbulence",) + tuple(f"D_r0_{x:g}_corrected" for x in d_over_r0)
 
 
 def scene(quick: bool, geometry_deg=GEOMETRY_DEG, d_over_r0=D_OVER_R0):
@@ -186,7 +182,9 @@ def _trial(task):
     res = run_plate(plate, cfg, rng)
     out = {"metal": name, "paint": [plate.paint_n, plate.paint_kappa]}
     true_dolp = _true_region_dolp(res)
-    for key in kinds(d_over_r0):
+    # the judged images: the restored no-turbulence image and each D/r0's corrected one
+    kinds = [case if d is None else f"{case}_corrected" for case, d in cases_of(cfg)]
+    for key in kinds:
         for region in ("paint", name):
             post = res.metrics[key][f"posterior_{region}"]
             for q in ("n", "kappa"):
