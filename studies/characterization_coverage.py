@@ -326,7 +326,7 @@ def run_coverage(ctx, geometry_deg, d_over_r0, n_seeds=None):
     ctx.metrics["seeds"] = n_seeds
     ctx.metrics["coverage"] = cov
     ctx.metrics["trials"] = trials
-    _figure(ctx, cov)
+    _figure(ctx, cov, geometry_deg, d_over_r0)
     lines = [
         "| image / region / parameter | trials judged (weakly determined) | 68 % coverage "
         "| 95 % coverage | within 2 binomial SE | median 68 % width |",
@@ -386,7 +386,17 @@ def run_coverage(ctx, geometry_deg, d_over_r0, n_seeds=None):
     )
 
 
-def _figure(ctx, cov):
+def _label(key: str) -> str:
+    """A family key as a tick label: ``D_r0_7.9_corrected/paint/n`` -> ``D/r0 = 7.9 / paint / n``."""
+    return (
+        key.replace("_corrected", "")
+        .replace("/", " / ")
+        .replace("D_r0_", "D/r0 = ")
+        .replace("no_turbulence", "no turbulence")
+    )
+
+
+def _figure(ctx, cov, geometry_deg, d_over_r0):
     from scatterlab.plotting import headless_pyplot
 
     plt = headless_pyplot()
@@ -403,13 +413,14 @@ def _figure(ctx, cov):
             nominal - 2 * se, nominal + 2 * se, alpha=0.15, color="C0" if level == "ci68" else "C1"
         )
         ax.axhline(nominal, ls=":", color="k", lw=0.8)
-    ax.set_xticks(
-        x, [k.replace("_corrected", "") for k in keys], rotation=30, ha="right", fontsize=7
-    )
+    ax.set_xticks(x, [_label(k) for k in keys], rotation=30, ha="right", fontsize=7)
     ax.set(
         ylabel="fraction of trials covering the truth",
         ylim=(0, 1.05),
-        title="Coverage of the region posteriors (bands: nominal +- 2 binomial SE)",
+        title=(
+            f"Coverage of the region posteriors: {min(geometry_deg):g}-{max(geometry_deg):g} deg, "
+            f"D/r0 = {', '.join(f'{d:g}' for d in d_over_r0)}\n(bands: nominal +- 2 binomial SE)"
+        ),
     )
     ax.legend(fontsize=8)
     ctx.save_figure(fig, "coverage")

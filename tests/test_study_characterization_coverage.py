@@ -1,7 +1,7 @@
 """The coverage study's report says which way a family misses its nominal rate, and how wide its intervals
 are (hand-made rows with known answers)."""
 
-from studies.characterization_coverage import coverage, direction, median_widths
+from studies.characterization_coverage import _label, coverage, direction, median_widths
 
 
 def _trial(covers68, covers95, lo, hi):
@@ -67,3 +67,9 @@ def test_weakly_determined_trials_leave_the_marginal_family_and_too_few_are_not_
     assert kappa["trials"] == 9 and not kappa["judged"] and passes(kappa)
     joint = cov["no_turbulence/metal/joint"]
     assert joint["trials"] == 24 and not passes(joint) and direction(joint) == "under-covers"
+
+
+def test_the_figure_names_a_turbulence_case_as_its_title_reads():
+    """Tick labels read "D/r0 = 7.9", as the main job's figures do; the D/r0 slash is not a separator."""
+    assert _label("D_r0_7.9_corrected/paint/n") == "D/r0 = 7.9 / paint / n"
+    assert _label("no_turbulence/metal/joint") == "no turbulence / metal / joint"
