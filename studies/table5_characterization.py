@@ -10,11 +10,15 @@ known to the inversion, the same value table5_synthetic uses (deviation: the tex
 sigma < 1 deg, measured from the specular lobe width). The text's central result is compared as a
 number: the paint's per-pixel scatter (sd of n) shrinks 2.0-4.2x from degraded to corrected; so are
 the metals' mean kappa under turbulence. Run time: quick (48 px, 3 angles, 30 iterations) 45 s measured at
-load ~3.7 on the shared 2-core machine; full (128 px, 7 angles, 250 iterations): 186 s wall with
-``--workers 2`` at a load average of about 2 (24 Nov 2026, one blind start: the scene default is three
-since 28 Nov 2026; the estimate of over an hour from the quick work was wrong), verdict "partly": the
-paint's scatter of n shrinks 1.1x, 0.5x, 2.3x and 2.2x (2 of 4 cases reach the text's 2x), and the
-corrected metals' mean kappa is 3-80 % below the published values.
+load ~3.7 on the shared 2-core machine; full (128 px, 7 angles, 250 iterations): 260 s wall with ``--workers 2``
+(28 Nov 2026, three blind starts, the scene default). Verdict "not reproduced": the paint's scatter of n shrinks
+1.22x, 0.58x, 1.16x and 1.12x from degraded to corrected (aluminium D/r0 7.9, 12.9, steel 7.9, 12.9; none
+reaches the text's 2x), and the corrected metals' mean kappa is 53 % and 62 % below the published values for
+aluminium, 13 % above and 15 % below for steel. The run with one blind start (24 Nov 2026, 186 s) had 1.1x,
+0.5x, 2.3x and 2.2x, verdict "partly": averaging the starts' restorations lowered the corrected S0 and DOLP
+errors of the default run, but the paint's per-pixel n scatters about as much as in the degraded image, and
+more for aluminium at D/r0 12.9 (sd 0.77 against 0.44). The corrected paint's per-pixel means are within
+0.07-0.23 of the truth in n (the report's table).
 """
 
 import numpy as np
