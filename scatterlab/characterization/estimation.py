@@ -409,7 +409,7 @@ def _noise_model(errors, m, sampler):
 
 
 def region_posteriors(
-    regions, thetas, sigma, rng, *, n_steps=None, executor=None, model_error=False
+    regions, thetas, sigma, rng, *, n_steps=None, executor=None, model_error=False, bounds=None
 ) -> list:
     """Sample the posterior of (n, kappa) for each :class:`RegionData` (one emcee problem per region).
 
@@ -432,6 +432,10 @@ def region_posteriors(
         each geometry's error. Right for measured data; a simulation rendered with the pBRDF itself
         has none. On held-out exact solutions this form covered the truth at 69 % / 98 % (68 % / 95 %
         intervals; study ``dolp_vs_mom``).
+    bounds : dict, optional
+        ``{region name: {"n": (low, high), "kappa": (low, high)}}``: the uniform prior ranges of a region's
+        posterior (:meth:`scatterlab.characterization.Plate.prior_bounds`); a region not named keeps the
+        inversion's defaults.
 
     Returns
     -------
@@ -471,6 +475,8 @@ def region_posteriors(
                 noise, extra = _noise_model(independent, thetas.size, sample_posteriors)
                 if np.any(common):
                     extra["correlated"] = common
+            if bounds:
+                extra["bounds"] = [bounds.get(regions[k].name) for k in idx]
             for k, p in zip(
                 idx, sample_posteriors(means[idx], thetas, thetas, noise, rng, **kw, **extra)
             ):

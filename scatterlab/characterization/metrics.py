@@ -146,6 +146,16 @@ def _classification(result, case, kind, mid, sel, priors):
     }
 
 
+def _prior_bounds(plate) -> dict | None:
+    """The plate's prior ranges per region, or None when it keeps the inversion's defaults."""
+    given = any(
+        getattr(plate, f"{r}_{q}_prior") is not None
+        for r in ("metal", "paint")
+        for q in ("n", "kappa")
+    )
+    return {r: plate.prior_bounds(r) for r in ("metal", "paint")} if given else None
+
+
 def _at_bound(n, k) -> float:
     """Share of fitted pixels whose n or kappa sits on a bound of the fit (the bound, not an estimate)."""
     from scatterlab.inversion.least_squares import DEFAULT_BOUNDS
@@ -287,6 +297,7 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
                 n_steps=cfg.posterior_steps,
                 executor=executor,
                 model_error=cfg.model_error,
+                bounds=_prior_bounds(plate),
             )
             for r in est["regions"]:
                 name = plate.metal if r.name == "metal" else r.name

@@ -204,7 +204,17 @@ def _with_truth(e) -> str:
     return f"{e['median']:.{d}f} [{e['ci68'][0]:.{d}f}, {e['ci68'][1]:.{d}f}]", d
 
 
-def _posterior_lines(plate, psum) -> list:
+def _prior_text(plate) -> str:
+    """The posteriors' prior ranges, for the sentence above the posterior table."""
+    ranges = [
+        f"{'paint' if r == 'paint' else plate.metal} n in {list(b['n'])}, kappa in {list(b['kappa'])}"
+        for r in ("paint", "metal")
+        for b in [plate.prior_bounds(r)]
+    ]
+    return "Uniform prior: " + "; ".join(ranges) + "."
+
+
+def _posterior_lines(plate, psum, prior_text="") -> list:
     post = {k: cs for k, cs in psum.items() if "posterior_paint" in cs}
     if not post:
         return []
@@ -216,7 +226,7 @@ def _posterior_lines(plate, psum) -> list:
         "cover it, and whether the truth lies in the joint (n, kappa) likelihood-ratio region at "
         "68 / 95 %. Where the data fix only a combination of n and kappa (a metal at these "
         "geometries: the note below the table says so), the marginal intervals follow the prior and "
-        "the joint region is the calibrated statement:",
+        "the joint region is the calibrated statement." + (f" {prior_text}" if prior_text else ""),
         "",
         "| image | region | n [68 %] | n 95 % | kappa [68 %] | kappa 95 % | truth | covered 68 / 95 % "
         "| joint region 68 / 95 % |",
@@ -286,7 +296,7 @@ def report_markdown(cfg, results, checks, *, seconds, ideal) -> str:
             lines += _classification_table(plate, psum, mid_deg, cfg.priors)
         if any("paint" in cs for cs in psum.values()):
             lines += _pixel_table(plate, psum)
-        lines += _posterior_lines(plate, psum)
+        lines += _posterior_lines(plate, psum, _prior_text(res.plate))
         lines += ["", f"![{plate}]({plate}.png)", ""]
     if checks:
         failed = sum(not ok for _, _, ok in checks)

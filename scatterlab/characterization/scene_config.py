@@ -47,6 +47,9 @@ paint_n = 1.39
 paint_kappa = 0.34
 metal_roughness = 0.3
 paint_roughness = 0.3
+# paint_n_prior = [1.3, 1.8]          # optional, per material and index (metal_n_prior, metal_kappa_prior,
+                                      # paint_n_prior, paint_kappa_prior): the posteriors' prior range
+                                      # [low, high]; default n in [0, 5], kappa in [0, 25]
 ```
 """
 
@@ -82,6 +85,36 @@ class Plate:
     paint_kappa: float = 0.34
     metal_roughness: float = 0.3
     paint_roughness: float = 0.3
+    # prior ranges [low, high] of the region posteriors (None: the inversion's defaults, n in [0, 5],
+    # kappa in [0, 25]); what the scientist knows of the material before the measurement
+    metal_n_prior: list | None = None
+    metal_kappa_prior: list | None = None
+    paint_n_prior: list | None = None
+    paint_kappa_prior: list | None = None
+
+    def prior_bounds(self, region: str) -> dict:
+        """The region posterior's prior ranges for ``region`` ("metal" or "paint").
+
+        Parameters
+        ----------
+        region : str
+            ``"metal"`` or ``"paint"``.
+
+        Returns
+        -------
+        dict
+            ``{"n": (low, high), "kappa": (low, high)}`` with the inversion's defaults
+            (:data:`scatterlab.inversion.DEFAULT_BOUNDS`) where the plate gives none.
+        """
+        from scatterlab.inversion.least_squares import DEFAULT_BOUNDS
+
+        if region not in ("metal", "paint"):
+            raise ValueError(f"region must be 'metal' or 'paint', got {region!r}")
+        out = {}
+        for q in ("n", "kappa"):
+            given = getattr(self, f"{region}_{q}_prior")
+            out[q] = tuple(float(x) for x in (DEFAULT_BOUNDS[q] if given is None else given))
+        return out
 
     def validate(self, where: str = "plates") -> "Plate":
         if not isinstance(self.metal, str) or not self.metal.isidentifier():
@@ -100,6 +133,28 @@ class Plate:
             v = getattr(self, name)
             if not (math.isfinite(v) and 1e-3 <= v <= 1.5):
                 raise ValueError(f"{where}.{name} (rms slope) must be in [0.001, 1.5], got {v!r}")
+        for region in ("metal", "paint"):
+            for q in ("n", "kappa"):
+                name = f"{region}_{q}_prior"
+                v = getattr(self, name)
+                if v is None:
+                    continue
+                ok = (
+                    isinstance(v, (list, tuple))
+                    and len(v) == 2
+                    and all(_is(x, float) and math.isfinite(x) for x in v)
+                    and 0 <= v[0] < v[1]
+                )
+                if not ok:
+                    raise ValueError(
+                        f"{where}.{name} must be [low, high] with 0 <= low < high, got {v!r}"
+                    )
+                truth = getattr(self, f"{region}_{q}")
+                if not v[0] <= truth <= v[1]:
+                    # a simulation whose prior excludes its own truth cannot cover it
+                    raise ValueError(
+                        f"{where}.{name} {list(v)} excludes the plate's {region}_{q} = {truth!r}"
+                    )
         return self
 
 
@@ -166,7 +221,17 @@ def _check_types(obj, where: str = "") -> None:
     prefix = f"{where}." if where else ""
     for f in fields(obj):
         v = getattr(obj, f.name)
-        if f.name == "plates" or (f.name == "region_margin_px" and v is None):
+        if (
+            f.name == "plates"
+            or (f.name in ("region_margin_px",) or f.name.endswith("_prior"))
+            and v is None
+        ):
+            continue
+        if f.name.endswith("_prior"):  # [low, high], checked with the ranges
+            if not (isinstance(v, list) and all(_is(x, float) for x in v)):
+                raise ValueError(
+                    f"{prefix}{f.name} must be a list [low, high] of floats, got {v!r}"
+                )
             continue
         if (
             f.name == "phase_diversity_waves"

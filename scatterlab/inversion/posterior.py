@@ -1712,6 +1712,7 @@ def sample_posteriors(
     systematic=None,
     covariance=None,
     correlated=None,
+    bounds=None,
     **kw,
 ) -> list[Posterior]:
     """:func:`sample_posterior` for each row of ``dolp`` (K, M) -- regions or pixels -- through an
@@ -1742,6 +1743,8 @@ def sample_posteriors(
     systematic : float, array (M,) or (K, M), optional
     covariance : array (M, M) or (K, M, M), optional
     correlated : array (M,) or (K, M), optional
+    bounds : dict or sequence of K dicts (or None), optional
+        Uniform prior ranges (as in :func:`sample_posterior`), shared or one per problem.
     **kw
         Other keywords of :func:`sample_posterior`.
 
@@ -1755,6 +1758,11 @@ def sample_posteriors(
     rng = np.random.default_rng(rng)
     y = np.atleast_2d(np.asarray(dolp, float))
     seeds = rng.integers(2**63, size=y.shape[0])
+    per_problem_bounds = isinstance(bounds, (list, tuple))
+    if per_problem_bounds and len(bounds) != y.shape[0]:
+        raise ValueError(
+            f"bounds must be one dict or {y.shape[0]} (one per problem), got {len(bounds)}"
+        )
     tasks = []
     for k, row in enumerate(y):
         kk = dict(
@@ -1763,6 +1771,9 @@ def sample_posteriors(
             covariance=_per_problem(covariance, k, 2),
             correlated=_per_problem(correlated, k, 1),
         )
+        b = bounds[k] if per_problem_bounds else bounds
+        if b is not None:
+            kk["bounds"] = b
         if (
             backend is not None
         ):  # one file per problem: HDF5 files are not safe for concurrent writers

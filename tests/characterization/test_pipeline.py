@@ -271,3 +271,18 @@ def test_failure_notes_give_the_cause_and_the_chance_of_interval_misses():
     assert (
         "1 of the metals' marginal 68 % intervals miss" in text and "1 of 3 68 % statements" in text
     )
+
+
+def test_a_plates_prior_ranges_reach_its_posteriors_and_the_report(tmp_path):
+    plate = Plate(metal_n_prior=[1.0, 2.0], metal_kappa_prior=[14.0, 18.0])
+    cfg = tiny(estimate=["posterior"])
+    cfg.plates = [plate.validate()]
+    text = characterize(cfg, tmp_path).read_text()
+    assert "aluminium n in [1.0, 2.0], kappa in [14.0, 18.0]" in text
+    assert "paint n in [0.0, 5.0], kappa in [0.0, 25.0]" in text  # the default where none is given
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["scene"]["plates"][0]["metal_kappa_prior"] == [14.0, 18.0]
+    for case in ("no_turbulence", "D_r0_7.9_corrected"):
+        post = s["plates"]["aluminium"][case]["posterior_aluminium"]
+        for q, (lo, hi) in (("n", (1.0, 2.0)), ("kappa", (14.0, 18.0))):
+            assert lo <= post[q]["ci95"][0] and post[q]["ci95"][1] <= hi, (case, q, post[q])
