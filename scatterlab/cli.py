@@ -5,7 +5,7 @@
     scatterlab study list
     scatterlab study run ID [--quick] [--out DIR] [--seed N] [--force]
     scatterlab study run all [--quick] [--out DIR]
-    scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick]
+    scatterlab characterize [SCENE.toml] [--out DIR] [--force] [--quick] [--workers N] [--scheduler ADDR]
     scatterlab analyze DATASET [--out DIR] [--force] [--psf blind|diffraction] [--iterations N]
                      [--classes adaptive|priors] [--bias-samples N] [--model-error] [--frames F]
                      [--psf-refine none|layout] [--blind-starts K] [--bad-pixels MASK.tif|.npy]
@@ -191,13 +191,13 @@ def _characterize(args) -> int:
         print(f"scatterlab: {_message(exc)}", file=sys.stderr)
         return 2
     if args.quick:  # a small, fast version of the same scene (tests, smoke runs)
-        cfg.image_size, cfg.geometry_deg, cfg.d_over_r0 = (
-            64,
-            cfg.geometry_deg[::3],
-            cfg.d_over_r0[:1],
-        )
-        cfg.iterations, cfg.posterior_steps = 15, 400
-        cfg.title = f"{cfg.title} -- quick: a smoke test, not a reproduction"
+        from scatterlab.characterization.scene_config import quick_scene
+
+        try:
+            cfg = quick_scene(cfg)
+        except ValueError as exc:
+            print(f"scatterlab: {_message(exc)}", file=sys.stderr)
+            return 2
     return _report(args, lambda ex: characterize(cfg, args.out, overwrite=args.force, executor=ex))
 
 
@@ -779,10 +779,15 @@ def main(argv=None) -> int:
     ch.add_argument(
         "scene", nargs="?", help="scene description (TOML); default: the bundled painted plates"
     )
-    ch.add_argument("--out", default="results/characterize", help="output folder")
+    ch.add_argument(
+        "--out", default="results/characterize", help="output folder (default results/characterize)"
+    )
     ch.add_argument("--force", action="store_true", help="replace an existing report")
     ch.add_argument(
-        "--quick", action="store_true", help="smaller images, fewer geometries and iterations"
+        "--quick",
+        action="store_true",
+        help="a smoke test: at most 64 px, 3 geometries spread over the scene's range, the first D/r0, "
+        "15 EM iterations, 400 posterior steps",
     )
     ch.add_argument("--workers", type=int, default=None, help="local worker processes")
     ch.add_argument("--scheduler", default=None, help="Dask scheduler address")

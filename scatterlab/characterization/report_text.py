@@ -10,8 +10,9 @@ def _header(cfg, seconds, ideal) -> list:
     return [
         f"# Characterization: {cfg.title}",
         "",
-        f"{cfg.wavelength_um:g} um, specular geometries {cfg.geometry_deg} deg, D/r0 {cfg.d_over_r0}, "
-        f"{cfg.photons:g} photo-electrons at the brightest channel pixel, {cfg.read_noise:g} e- read noise, "
+        f"{cfg.wavelength_um:g} um, specular geometries {cfg.geometry_deg} deg, "
+        + (f"D/r0 {cfg.d_over_r0}, " if cfg.d_over_r0 else "no turbulent case, ")
+        + f"{cfg.photons:g} photo-electrons at the brightest channel pixel, {cfg.read_noise:g} e- read noise, "
         f"{cfg.image_size}^2 pixels (2 per lambda/D), polarizers {cfg.polarizer_deg} deg, "
         + _psf_estimator(cfg)
         + f", priors {cfg.priors}, sigma "
@@ -21,11 +22,23 @@ def _header(cfg, seconds, ideal) -> list:
         "and is the reference the others are compared with; `raw` is the same image without restoration. "
         "Images are keystone-corrected to object coordinates and aligned with the reference; statistics "
         "exclude a border of 1/16 of the image, and region statistics a margin at the paint/metal edges. "
-        "This is a simulation: the truth is shown beside every estimate. Bracketed numbers are the "
-        "reference text's measured Tables 4 and 5 (real plates: the trend to expect, not numbers to "
-        "match). Data: `results.h5`; every number: `summary.json`.",
+        "This is a simulation: the truth is shown beside every estimate."
+        + _published_note(cfg)
+        + " Data: `results.h5`; every number: `summary.json`.",
         "",
     ]
+
+
+def _published_note(cfg) -> str:
+    """The header's sentence on the reference text's published numbers, for plates that have them."""
+    from scatterlab.characterization.reference_tables import TABLE4, TABLE5
+
+    if not any(p.metal in TABLE4 or p.metal in TABLE5 for p in cfg.plates):
+        return ""
+    return (
+        " Bracketed numbers in the classification and per-pixel tables are the reference text's measured "
+        "Tables 4 and 5 (real plates: the trend to expect, not numbers to match)."
+    )
 
 
 def _psf_estimator(cfg) -> str:
@@ -352,26 +365,39 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
             if "psf_l1_error" in cs
         )
         plural = "s" if len(after) > 1 else ""
-        notes.append(
+        metals = {res.plate.metal for res in results}
+        text = (
             f"- **{len(after)} failure{plural} after deconvolution.** The blind PSF estimates' L1 "
             f"distance from the true PSFs (0 = the true PSF, 2 = disjoint): {dist}. A wrong PSF leaves "
             "ghost copies of the scratches and of the metal's edges in the corrected images (parallel "
             "lines and streaks in the S0 and DOLP maps). Averaging the restorations of several random "
             "starts (scene key `blind_starts`) lowers them, since they change place with the start, "
             "but does not remove them; with the true PSF over the whole field the same restoration "
-            "leaves none. The metal's per-pixel |eta error| is another matter: a metal's DOLP is a few "
-            "hundredths, a pixel's noise is of that order, and any deconvolution raises the noise of a "
-            "pixel while the blur of the degraded image averages it. With the true PSF the same "
-            "restoration worsens it too (measured on the default scene's aluminium plate: 9.60 against "
-            "9.51 at D/r0 7.9, 13.64 against 11.90 at 12.9; on another draw of its steel plate 1.51 "
-            "against 1.21 and 1.71 against 1.42): the metal's measurement is its region posterior. "
-            "The classification unmixes the Stokes images, which puts the plate's edges where they "
-            "are in the degraded and the corrected images alike. Neither classifies the scratches, "
-            "one or two pixels wide: the blur leaves them less than half metal, and they are most of "
-            "the classification error left in both images. Two defocused cameras beside the "
-            "polarimeter (phase diversity, scene key `phase_diversity_waves`) identify the PSF at D/r0 "
-            "7.9 but not yet at 12.9 (`docs/characterization_accuracy.md`)."
+            "leaves none."
         )
+        if any("median |eta error|" in c and any(f"the {m}'s" in c for m in metals) for c in after):
+            text += (
+                " The metal's per-pixel |eta error| is another matter: a metal's DOLP is a few "
+                "hundredths, a pixel's noise is of that order, and any deconvolution raises the noise of "
+                "a pixel while the blur of the degraded image averages it. With the true PSF the same "
+                "restoration worsens it too (measured on the bundled default scene's aluminium plate: "
+                "9.60 against 9.51 at D/r0 7.9, 13.64 against 11.90 at 12.9; on another draw of its "
+                "steel plate 1.51 against 1.21 and 1.71 against 1.42): the metal's measurement is its "
+                "region posterior."
+            )
+        if any("classification" in c for c in after):
+            text += (
+                " The classification unmixes the Stokes images, which puts the plate's edges where they "
+                "are in the degraded and the corrected images alike. Neither classifies the scratches, "
+                "one or two pixels wide: the blur leaves them less than half metal, and they are most "
+                "of the classification error left in both images."
+            )
+        text += (
+            " Two defocused cameras beside the polarimeter (phase diversity, scene key "
+            "`phase_diversity_waves`) identified the PSF of the bundled default scene at D/r0 7.9 but "
+            "not at 12.9 (`docs/characterization_accuracy.md`)."
+        )
+        notes.append(text)
     # the calibrated statements: the paint's marginal intervals and every joint region (a metal's
     # marginal interval follows the prior along its ridge of equal DOLP: its note says so)
     metal = {res.plate.metal for res in results}

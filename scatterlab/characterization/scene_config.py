@@ -66,6 +66,7 @@ __all__ = [
     "diversity_waves",
     "load_scene",
     "plate_labels",
+    "quick_scene",
 ]
 
 ESTIMATES = ("classes", "n_kappa", "posterior")
@@ -252,7 +253,10 @@ def _check_types(obj, where: str = "") -> None:
             str(f.type), type(f.default)
         )
         if not _is(v, kind):
-            raise ValueError(f"{prefix}{f.name} must be a {kind.__name__}, got {v!r}")
+            what = {"int": "an integer", "float": "a number", "str": "a string"}.get(
+                kind.__name__, f"a {kind.__name__}"
+            )
+            raise ValueError(f"{prefix}{f.name} must be {what}, got {v!r}")
 
 
 def _is(v, kind) -> bool:
@@ -377,6 +381,57 @@ def default_scene() -> SceneConfig:
     return SceneConfig().validate()
 
 
+QUICK_IMAGE_SIZE = 64
+QUICK_GEOMETRIES = 3
+
+
+def quick_scene(cfg: SceneConfig) -> SceneConfig:
+    """A small, fast version of a scene (``characterize --quick``): a smoke test, not a reproduction.
+
+    At most :data:`QUICK_IMAGE_SIZE` pixels, :data:`QUICK_GEOMETRIES` geometries spread over the scene's
+    range (both ends kept; a scene with fewer keeps all), the first D/r0 only, 15 EM iterations and 400
+    posterior steps. A region margin set in pixels shrinks with the image.
+
+    Parameters
+    ----------
+    cfg : SceneConfig
+        A validated scene (left unchanged).
+
+    Returns
+    -------
+    SceneConfig
+        The reduced scene, validated.
+
+    Raises
+    ------
+    ValueError
+        The reduced scene is invalid; the message says that ``--quick`` made it so.
+    """
+    import copy
+
+    q = copy.deepcopy(cfg)
+    size = min(cfg.image_size, QUICK_IMAGE_SIZE)
+    g = list(cfg.geometry_deg)
+    if len(g) > QUICK_GEOMETRIES:
+        idx = sorted(
+            {round(i * (len(g) - 1) / (QUICK_GEOMETRIES - 1)) for i in range(QUICK_GEOMETRIES)}
+        )
+        g = [g[i] for i in idx]
+    q.image_size, q.geometry_deg, q.d_over_r0 = size, g, list(cfg.d_over_r0[:1])
+    if isinstance(cfg.phase_diversity_waves, list):
+        q.phase_diversity_waves = list(cfg.phase_diversity_waves[:1])
+    if cfg.region_margin_px is not None:
+        q.region_margin_px = int(round(cfg.region_margin_px * size / cfg.image_size))
+    q.iterations, q.posterior_steps = min(cfg.iterations, 15), min(cfg.posterior_steps, 400)
+    q.title = f"{cfg.title} -- quick: a smoke test, not a reproduction"
+    try:
+        return q.validate()
+    except ValueError as exc:
+        raise ValueError(
+            f"--quick reduced the scene ({size} px, geometries {g} deg, D/r0 {q.d_over_r0}) and then: {exc}"
+        ) from exc
+
+
 def plate_labels(cfg: SceneConfig, rng):
     """The plate's object-coordinate label map ``(image_size, image_size)`` (0 paint, 1 metal, 2 scratch).
 
@@ -432,6 +487,8 @@ def load_scene(path) -> SceneConfig:
         pk = {f.name for f in fields(Plate)}
         cfg.plates = []
         for k, p in enumerate(plates):
+            if not isinstance(p, dict):
+                raise ValueError(f"{path}: plates[{k}] must be a [[plates]] table, got {p!r}")
             bad = set(p) - pk
             if bad:
                 raise ValueError(
