@@ -494,6 +494,16 @@ def load_scene(path) -> SceneConfig:
                 raise ValueError(
                     f"{path}: unknown key(s) {sorted(bad)} in plates[{k}]; allowed: {sorted(pk)}"
                 )
+            missing = [k for k in ("metal_n", "metal_kappa") if k not in p]
+            if p.get("metal", "aluminium") != "aluminium" and missing:
+                import warnings
+
+                warnings.warn(
+                    f"{path}: plates[{k}] names metal {p['metal']!r} but not {' or '.join(missing)}: "
+                    f"aluminium's {', '.join(f'{m} = {getattr(Plate, m)}' for m in missing)} is used",
+                    UserWarning,
+                    stacklevel=2,
+                )
             cfg.plates.append(Plate(**p))
     try:
         return cfg.validate()

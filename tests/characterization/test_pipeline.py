@@ -77,7 +77,7 @@ def test_only_requested_estimates_are_computed(tmp_path):
 def test_scene_files_are_validated(tmp_path):
     p = tmp_path / "scene.toml"
     p.write_text(
-        'image_size = 32\ngeometry_deg = [40, 50]\n[[plates]]\nmetal = "steel"\nmetal_n = 3.6\n'
+        'image_size = 32\ngeometry_deg = [40, 50]\n[[plates]]\nmetal = "steel"\nmetal_n = 3.6\nmetal_kappa = 5.88\n'
     )
     cfg = load_scene(p)
     assert cfg.plates[0].metal == "steel" and cfg.image_size == 32

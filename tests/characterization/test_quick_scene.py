@@ -75,3 +75,12 @@ def test_the_header_promises_published_numbers_only_for_plates_that_have_them():
     text = "\n".join(_header(cfg, 1.0, ideal))
     assert "Tables 4 and 5" not in text and "no turbulent case" in text
     assert "Tables 4 and 5" in "\n".join(_header(default_scene(), 1.0, ideal))
+
+
+def test_a_named_metal_without_its_index_is_flagged(tmp_path):
+    p = tmp_path / "scene.toml"
+    p.write_text('[[plates]]\nmetal = "copper"\nmetal_kappa = 9.0\n')
+    with pytest.warns(
+        UserWarning, match="names metal 'copper' but not metal_n: aluminium's metal_n = 1.44"
+    ):
+        load_scene(p)
