@@ -331,7 +331,7 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
         notes.append(
             f"the data determine {' and '.join(weak)} only weakly (posterior contraction "
             + ", ".join(contraction_text(contraction[p]) for p in weak)
-            + "; 1 = fixed by the data, 0 = the prior's spread): the marginal interval follows the "
+            + "; 1 = fixed by the data, 0 = the prior's spread, none = below 0.005): the marginal interval follows the "
             "prior along a ridge of equal DOLP, and for a fixed material it does not cover at its "
             "nominal rate. The joint (n, kappa) likelihood-ratio region is the calibrated statement"
             + (
