@@ -73,3 +73,34 @@ def test_the_figure_names_a_turbulence_case_as_its_title_reads():
     """Tick labels read "D/r0 = 7.9", as the main job's figures do; the D/r0 slash is not a separator."""
     assert _label("D_r0_7.9_corrected/paint/n") == "D/r0 = 7.9 / paint / n"
     assert _label("no_turbulence/metal/joint") == "no turbulence / metal / joint"
+
+
+def test_joint_regions_of_a_matched_prior_run_are_recorded_not_judged():
+    from studies.characterization_coverage import passes
+
+    trials = [
+        {
+            "metal": "metal",
+            "no_turbulence/metal/joint": {"ci68": True, "ci95": True, "recorded_only": True},
+        }
+        for _ in range(24)
+    ]
+    row = coverage(trials)["no_turbulence/metal/joint"]
+    assert row["recorded_only"] and not row["judged"] and passes(row)
+    assert row["ci68"]["rate"] == 1.0  # still recorded
+
+
+def test_a_matched_prior_plate_is_drawn_from_the_prior_its_posteriors_use():
+    import numpy as np
+
+    from studies.characterization_coverage import METAL_PRIOR, METALS, PAINT_PRIOR, draw_plate
+
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        p = draw_plate(rng, True)
+        for region, box in (("metal", METAL_PRIOR), ("paint", PAINT_PRIOR)):
+            b = p.validate().prior_bounds(region)
+            assert b == {q: tuple(box[q]) for q in ("n", "kappa")}
+            assert all(b[q][0] <= getattr(p, f"{region}_{q}") <= b[q][1] for q in ("n", "kappa"))
+    p = draw_plate(rng, False)  # a user's scene: a fixed metal, the default prior
+    assert p.metal in METALS and p.metal_n_prior is None and p.paint_kappa_prior is None
