@@ -244,10 +244,11 @@ def draw_plate(rng, matched_prior: bool) -> Plate:
     -------
     Plate
     """
-    pn, pk = (float(rng.uniform(*PAINT_PRIOR[q])) for q in ("n", "kappa"))
-    if not matched_prior:
+    if not matched_prior:  # the draws in this order, so that a seed gives the plate it gave before
         name = list(METALS)[rng.integers(len(METALS))]
+        pn, pk = (float(rng.uniform(*PAINT_PRIOR[q])) for q in ("n", "kappa"))
         return Plate(name, *METALS[name], pn, pk)
+    pn, pk = (float(rng.uniform(*PAINT_PRIOR[q])) for q in ("n", "kappa"))
     mn, mk = (float(rng.uniform(*METAL_PRIOR[q])) for q in ("n", "kappa"))
     return Plate(
         "metal",

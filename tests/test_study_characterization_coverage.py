@@ -104,3 +104,20 @@ def test_a_matched_prior_plate_is_drawn_from_the_prior_its_posteriors_use():
             assert all(b[q][0] <= getattr(p, f"{region}_{q}") <= b[q][1] for q in ("n", "kappa"))
     p = draw_plate(rng, False)  # a user's scene: a fixed metal, the default prior
     assert p.metal in METALS and p.metal_n_prior is None and p.paint_kappa_prior is None
+
+
+def test_the_wide_prior_design_draws_the_plates_it_drew_before():
+    """A seed of the held-out study gives the plate its documented runs had: a metal index, then the paint's
+    n and kappa."""
+    import numpy as np
+
+    from studies.characterization_coverage import METALS, draw_plate
+
+    plate = draw_plate(np.random.default_rng(7), False)
+    rng = np.random.default_rng(7)
+    name = list(METALS)[rng.integers(len(METALS))]
+    assert (plate.metal, plate.paint_n, plate.paint_kappa) == (
+        name,
+        rng.uniform(1.3, 1.7),
+        rng.uniform(0.05, 0.6),
+    )
