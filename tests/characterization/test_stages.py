@@ -325,8 +325,9 @@ def test_model_error_is_chosen_by_the_regions_class(monkeypatch):
 
 def test_known_psf_bias_error_is_the_replicates_noise_and_the_unexplained_edge_shift():
     """After noisy known-PSF re-simulations the region's error is their measured noise (spread x
-    sqrt(1 + 1/R)), the data's edge shift minus theirs (the edge mixing their layout explains is no error) and
-    the calibrated fraction of the bias, in quadrature; the pixel-scatter estimate is replaced."""
+    sqrt(1 + 1/R)), the data's edge shift minus theirs (the edge mixing their layout explains is no error; its
+    rms over the geometries, so that no geometry's single draw near 0 leaves it without edge error) and the
+    calibrated fraction of the bias, in quadrature; the pixel-scatter estimate is replaced."""
     from scatterlab.characterization.estimation import RegionData
     from scatterlab.characterization.self_calibration import (
         KNOWN_PSF_SYSTEMATIC_FRACTION,
@@ -355,10 +356,14 @@ def test_known_psf_bias_error_is_the_replicates_noise_and_the_unexplained_edge_s
     c = bias_corrected(r, b)
     np.testing.assert_allclose(c.mean, [0.42, 0.31])
     np.testing.assert_allclose(c.statistical, 0.001 * np.sqrt(1.25))
-    np.testing.assert_allclose(c.edge, [0.002, 0.001])
+    edge = np.sqrt((0.002**2 + 0.001**2) / 2)  # unexplained shifts -0.002 and -0.001
+    np.testing.assert_allclose(c.edge, [edge, edge])
     f = KNOWN_PSF_SYSTEMATIC_FRACTION
-    expect = np.sqrt(0.001**2 * 1.25 + np.array([0.002, 0.001]) ** 2 + (f * np.abs(b.mean)) ** 2)
+    expect = np.sqrt(0.001**2 * 1.25 + edge**2 + (f * np.abs(b.mean)) ** 2)
     np.testing.assert_allclose(c.error, expect)
+    # a geometry whose shift the re-simulations happen to match keeps the series' edge error
+    c0 = bias_corrected(r, BiasEstimate(b.mean, b.spread, 4, None, np.array([-0.010, 0.0]), f))
+    np.testing.assert_allclose(c0.edge, [np.sqrt(0.002**2 / 2)] * 2)
 
 
 def test_known_psf_replicates_measure_the_noise_of_a_region_mean():
