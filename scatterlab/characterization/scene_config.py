@@ -381,6 +381,9 @@ def default_scene() -> SceneConfig:
     return SceneConfig().validate()
 
 
+LIKELY_NANOMETRES_UM = (
+    30.0  # a wavelength_um above this is more likely nanometres than far infrared
+)
 QUICK_IMAGE_SIZE = 64
 QUICK_GEOMETRIES = 3
 
@@ -506,6 +509,16 @@ def load_scene(path) -> SceneConfig:
                 )
             cfg.plates.append(Plate(**p))
     try:
-        return cfg.validate()
+        cfg.validate()
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
+    if cfg.wavelength_um > LIKELY_NANOMETRES_UM:
+        import warnings
+
+        warnings.warn(
+            f"{path}: wavelength_um = {cfg.wavelength_um:g} is beyond the thermal infrared: nanometres given "
+            f"as micrometres? (the plates' indices must be the ones at this wavelength)",
+            UserWarning,
+            stacklevel=2,
+        )
+    return cfg

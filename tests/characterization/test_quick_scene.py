@@ -84,3 +84,10 @@ def test_a_named_metal_without_its_index_is_flagged(tmp_path):
         UserWarning, match="names metal 'copper' but not metal_n: aluminium's metal_n = 1.44"
     ):
         load_scene(p)
+
+
+def test_a_wavelength_in_nanometres_is_flagged(tmp_path):
+    p = tmp_path / "scene.toml"
+    p.write_text("wavelength_um = 1550\n")
+    with pytest.warns(UserWarning, match="nanometres given as micrometres"):
+        load_scene(p)
