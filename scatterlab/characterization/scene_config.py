@@ -222,11 +222,8 @@ def _check_types(obj, where: str = "") -> None:
     prefix = f"{where}." if where else ""
     for f in fields(obj):
         v = getattr(obj, f.name)
-        if (
-            f.name == "plates"
-            or (f.name in ("region_margin_px",) or f.name.endswith("_prior"))
-            and v is None
-        ):
+        optional = f.name == "region_margin_px" or f.name.endswith("_prior")  # None: the default
+        if f.name == "plates" or (optional and v is None):
             continue
         if f.name.endswith("_prior"):  # [low, high], checked with the ranges
             if not (isinstance(v, list) and all(_is(x, float) for x in v)):
@@ -497,7 +494,7 @@ def load_scene(path) -> SceneConfig:
                 raise ValueError(
                     f"{path}: unknown key(s) {sorted(bad)} in plates[{k}]; allowed: {sorted(pk)}"
                 )
-            missing = [k for k in ("metal_n", "metal_kappa") if k not in p]
+            missing = [key for key in ("metal_n", "metal_kappa") if key not in p]
             if p.get("metal", "aluminium") != "aluminium" and missing:
                 import warnings
 
