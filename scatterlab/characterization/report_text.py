@@ -382,18 +382,27 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
             text += (
                 " The metal's per-pixel |eta error| is another matter: a metal's DOLP is a few "
                 "hundredths, a pixel's noise is of that order, and any deconvolution raises the noise of "
-                "a pixel while the blur of the degraded image averages it. With the true PSF the same "
-                "restoration worsens it too (measured on the bundled default scene's aluminium plate: "
+                "a pixel while the blur of the degraded image averages it. The paint's polarized light "
+                "is many times the metal's own, and the share of its halo a restoration leaves in the "
+                "metal raises the metal's DOLP as much as the blur does (bundled default scene, "
+                "aluminium at D/r0 7.9: +0.005-0.026 after correction, +0.004-0.020 degraded, on a true "
+                "0.003-0.016). With the true PSF the same restoration worsens the median too (aluminium "
                 "9.60 against 9.51 at D/r0 7.9, 13.64 against 11.90 at 12.9; on another draw of its "
-                "steel plate 1.51 against 1.21 and 1.71 against 1.42): the metal's measurement is its "
-                "region posterior."
+                "steel plate 1.51 against 1.21 and 1.71 against 1.42), and for aluminium the median "
+                "does not rank DOLP errors: removing the degraded image's metal bias (from the truth) "
+                "raises it from 9.51 to 13.07, since the per-pixel fit runs along the ridge of equal "
+                "DOLP to its bounds whatever the error. The metal's measurement is its region "
+                "posterior."
             )
         if any("classification" in c for c in after):
             text += (
                 " The classification unmixes the Stokes images, which puts the plate's edges where they "
                 "are in the degraded and the corrected images alike. Neither classifies the scratches, "
                 "one or two pixels wide: the blur leaves them less than half metal, and they are most "
-                "of the classification error left in both images."
+                "of the classification error left in both images. What a corrected image adds is its "
+                "ghosts: on the bundled default scene's aluminium plate at 50 deg, 40 pixels wrongly "
+                "metal against 16 in the degraded image at D/r0 7.9, and 13 against 0 at 12.9, of the "
+                "12 544 pixels scored."
             )
         text += (
             " Two defocused cameras beside the polarimeter (phase diversity, scene key "
