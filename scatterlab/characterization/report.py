@@ -106,6 +106,8 @@ _versions, _save_png = versions, save_png  # the former private names
 
 
 def _title(key: str) -> str:
+    if key == "truth":
+        return "truth (object)"
     if key == "no_turbulence":
         return "no turbulence (restored)"
     if key == "no_turbulence_unrestored":
@@ -116,7 +118,8 @@ def _title(key: str) -> str:
 
 def plate_figure(out, result, cfg) -> Path:
     """S0, DOLP and classes at the geometry nearest 50 deg, n and kappa maps (all geometries), one column per
-    image, each row with its colour bar and the class map with a legend (Figs. 49-50, 59-61).
+    image after a column of the truth (the object), each row with one colour scale and its colour bar, and
+    the class map with a legend (Figs. 49-50, 59-61).
 
     Parameters
     ----------
@@ -141,27 +144,42 @@ def plate_figure(out, result, cfg) -> Path:
     o = result.observations[mid]
     rows = ["S0", "DOLP"] + (["classes"] if o.images[kinds[-1][1:]].classes is not None else [])
     rows += ["n", "kappa"] if "n_kappa" in cfg.estimate else []
+    columns = [("truth", None, None)] + kinds  # the object the simulation knows, first
     fig, axes = plt.subplots(
         len(rows),
-        len(kinds),
-        figsize=(2.6 * len(kinds) + 1, 2.5 * len(rows)),
+        len(columns),
+        figsize=(2.6 * len(columns) + 1, 2.5 * len(rows)),
         squeeze=False,
         layout="constrained",
     )
     ncls = 1 + len(cfg.priors == "ch6" and (1, 2) or (1,))
     cmap_cls = ListedColormap(CLASS_COLOURS[:ncls])
-    for j, (key, case, kind) in enumerate(kinds):
-        img = o.images[(case, kind)]
-        maps = result.estimates[key].get("maps")
+    truth = _truth_panels(result, o, mid, cfg, kinds[0][1:])
+    # one grey scale for every S0 panel, so the colour bar reads for all of them
+    s0_top = max(
+        float(np.nanpercentile(np.sqrt(np.clip(p, 0, None)), 99.5)) for p in _s0_panels(o, kinds)
+    )
+    for j, (key, case, kind) in enumerate(columns):
+        img = o.images[(case, kind)] if key != "truth" else None
+        maps = result.estimates[key].get("maps") if key != "truth" else None
         for i, row in enumerate(rows):
             ax = axes[i, j]
             if row == "S0":
-                im = ax.imshow(np.sqrt(np.clip(img.s0, 0, None)), cmap="gray")
+                s0 = truth["S0"] if img is None else img.s0
+                im = ax.imshow(np.sqrt(np.clip(s0, 0, None)), cmap="gray", vmin=0, vmax=s0_top)
             elif row == "DOLP":
-                im = ax.imshow(img.dolp, vmin=0, vmax=1, cmap="viridis")
-            elif row == "classes":
                 im = ax.imshow(
-                    img.classes if key != "no_turbulence" else _ref_classes(result, mid, cfg),
+                    truth["DOLP"] if img is None else img.dolp, vmin=0, vmax=1, cmap="viridis"
+                )
+            elif row == "classes":
+                if img is None:
+                    classes = truth["classes"]
+                else:
+                    classes = (
+                        img.classes if key != "no_turbulence" else _ref_classes(result, mid, cfg)
+                    )
+                im = ax.imshow(
+                    classes,
                     cmap=cmap_cls,
                     vmin=-0.5,
                     vmax=ncls - 0.5,
@@ -169,11 +187,14 @@ def plate_figure(out, result, cfg) -> Path:
                 )
             else:
                 im = ax.imshow(
-                    getattr(maps, row), vmin=0, vmax=5 if row == "n" else 25, cmap="magma"
+                    truth[row] if img is None else getattr(maps, row),
+                    vmin=0,
+                    vmax=5 if row == "n" else 25,
+                    cmap="magma",
                 )
             ax.set_xticks([])
             ax.set_yticks([])
-            if j == len(kinds) - 1 and row != "classes":
+            if j == len(columns) - 1 and row != "classes":
                 fig.colorbar(
                     im, ax=axes[i, :], shrink=0.8, label={"S0": "sqrt(S0) [sqrt(e-)]"}.get(row, row)
                 )
@@ -197,6 +218,34 @@ def plate_figure(out, result, cfg) -> Path:
     path = Path(out) / f"{result.plate.metal}.png"
     _save_png(fig, path)
     return path
+
+
+def _s0_panels(o, kinds) -> list:
+    return [o.images[(case, kind)].s0 for _, case, kind in kinds]
+
+
+def _truth_panels(result, o, mid, cfg, reference) -> dict:
+    """The object's panels for the figure: S0 scaled to the reference image's flux, DOLP, classes, n, kappa.
+
+    The true classes put the plate's metal (and its scratches, bare metal) in the class the no-turbulence
+    image gives most of it: with the Ch. VI priors that names the metal's group.
+    """
+    labels = result.labels
+    metal = labels > 0
+    ref_s0 = o.images[reference].s0
+    scale = np.nansum(ref_s0) / max(float(np.nansum(o.truth_s0)), 1e-300)
+    panels = {"S0": o.truth_s0 * scale, "DOLP": o.truth_dolp}
+    if o.images[reference].classes is not None:
+        ref = np.asarray(_ref_classes(result, mid, cfg))
+        votes = (
+            np.bincount(ref[metal & (ref > 0)].ravel(), minlength=2) if metal.any() else np.zeros(2)
+        )
+        group = int(np.argmax(votes[1:]) + 1) if votes[1:].sum() else 1
+        panels["classes"] = np.where(metal, group, 0)
+    p = result.plate
+    panels["n"] = np.where(metal, p.metal_n, p.paint_n).astype(float)
+    panels["kappa"] = np.where(metal, p.metal_kappa, p.paint_kappa).astype(float)
+    return panels
 
 
 def _ref_classes(result, mid, cfg):
