@@ -154,10 +154,13 @@ def plate_figure(out, result, cfg) -> Path:
     )
     ncls = 1 + len(cfg.priors == "ch6" and (1, 2) or (1,))
     cmap_cls = ListedColormap(CLASS_COLOURS[:ncls])
-    truth = _truth_panels(result, o, mid, cfg, kinds[0][1:])
+    # the no-turbulence classification, shown in its column and naming the metal's class in the truth's
+    ref_classes = _ref_classes(result, mid, cfg) if "classes" in rows else None
+    truth = _truth_panels(result.plate, result.labels, o, kinds[0][1:], ref_classes)
     # one grey scale for every S0 panel, so the colour bar reads for all of them
     s0_top = max(
-        float(np.nanpercentile(np.sqrt(np.clip(p, 0, None)), 99.5)) for p in _s0_panels(o, kinds)
+        float(np.nanpercentile(np.sqrt(np.clip(o.images[(case, kind)].s0, 0, None)), 99.5))
+        for _, case, kind in kinds
     )
     for j, (key, case, kind) in enumerate(columns):
         img = o.images[(case, kind)] if key != "truth" else None
@@ -175,9 +178,7 @@ def plate_figure(out, result, cfg) -> Path:
                 if img is None:
                     classes = truth["classes"]
                 else:
-                    classes = (
-                        img.classes if key != "no_turbulence" else _ref_classes(result, mid, cfg)
-                    )
+                    classes = img.classes if key != "no_turbulence" else ref_classes
                 im = ax.imshow(
                     classes,
                     cmap=cmap_cls,
@@ -220,31 +221,22 @@ def plate_figure(out, result, cfg) -> Path:
     return path
 
 
-def _s0_panels(o, kinds) -> list:
-    return [o.images[(case, kind)].s0 for _, case, kind in kinds]
-
-
-def _truth_panels(result, o, mid, cfg, reference) -> dict:
+def _truth_panels(plate, labels, o, reference, ref_classes=None) -> dict:
     """The object's panels for the figure: S0 scaled to the reference image's flux, DOLP, classes, n, kappa.
 
-    The true classes put the plate's metal (and its scratches, bare metal) in the class the no-turbulence
-    image gives most of it: with the Ch. VI priors that names the metal's group.
+    The true classes (given ``ref_classes``, the no-turbulence classification) put the plate's metal and
+    its scratches, bare metal, in the class the no-turbulence image gives most of it: with the Ch. VI
+    priors that names the metal's group.
     """
-    labels = result.labels
-    metal = labels > 0
-    ref_s0 = o.images[reference].s0
-    scale = np.nansum(ref_s0) / max(float(np.nansum(o.truth_s0)), 1e-300)
+    metal = np.asarray(labels) > 0
+    scale = np.nansum(o.images[reference].s0) / max(float(np.nansum(o.truth_s0)), 1e-300)
     panels = {"S0": o.truth_s0 * scale, "DOLP": o.truth_dolp}
-    if o.images[reference].classes is not None:
-        ref = np.asarray(_ref_classes(result, mid, cfg))
-        votes = (
-            np.bincount(ref[metal & (ref > 0)].ravel(), minlength=2) if metal.any() else np.zeros(2)
-        )
-        group = int(np.argmax(votes[1:]) + 1) if votes[1:].sum() else 1
-        panels["classes"] = np.where(metal, group, 0)
-    p = result.plate
-    panels["n"] = np.where(metal, p.metal_n, p.paint_n).astype(float)
-    panels["kappa"] = np.where(metal, p.metal_kappa, p.paint_kappa).astype(float)
+    if ref_classes is not None:
+        ref = np.asarray(ref_classes)
+        votes = np.bincount(ref[metal & (ref > 0)].ravel(), minlength=2)[1:]
+        panels["classes"] = np.where(metal, int(np.argmax(votes)) + 1 if votes.sum() else 1, 0)
+    panels["n"] = np.where(metal, plate.metal_n, plate.paint_n).astype(float)
+    panels["kappa"] = np.where(metal, plate.metal_kappa, plate.paint_kappa).astype(float)
     return panels
 
 

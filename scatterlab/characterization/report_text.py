@@ -398,8 +398,8 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
             text += (
                 "\n- **The classification** unmixes the Stokes images, which puts the plate's edges "
                 "where they are in the degraded and the corrected images alike. Neither classifies the "
-                "scratches, "
-                "one or two pixels wide: the blur leaves them less than half metal, and they are most "
+                "scratches, one or two pixels wide: the blur leaves them less than half metal, and they "
+                "are most "
                 "of the classification error left in both images. What a corrected image adds is its "
                 "ghosts: on the bundled default scene's aluminium plate at 50 deg, 40 pixels wrongly "
                 "metal against 16 in the degraded image at D/r0 7.9, and 13 against 0 at 12.9, of the "

@@ -297,13 +297,13 @@ def test_a_plates_prior_ranges_reach_its_posteriors_and_the_report(tmp_path):
             assert lo <= post[q]["ci95"][0] and post[q]["ci95"][1] <= hi, (case, q, post[q])
 
 
-def test_the_figures_truth_column_shows_the_object(monkeypatch):
+def test_the_figures_truth_column_shows_the_object():
     """The truth panels are the plate's own materials by label (scratches are bare metal), its S0 at the
     reference image's flux, and the metal in the class the no-turbulence image gives most of it (with the
     Ch. VI priors, its group)."""
     from types import SimpleNamespace
 
-    from scatterlab.characterization import report
+    from scatterlab.characterization.report import _truth_panels
     from scatterlab.characterization.scene_config import Plate
 
     labels = np.zeros((6, 6), int)
@@ -311,17 +311,15 @@ def test_the_figures_truth_column_shows_the_object(monkeypatch):
     labels[0, :3] = 2
     ref_classes = np.where(labels > 0, 2, 0)
     ref_classes[1, 4] = 1  # one pixel of the other metal group
-    monkeypatch.setattr(report, "_ref_classes", lambda result, mid, cfg: ref_classes)
     truth_s0 = np.where(labels > 0, 4.0, 1.0)
-    ref = SimpleNamespace(s0=3.0 * truth_s0, classes=ref_classes)
+    ref = SimpleNamespace(s0=3.0 * truth_s0)
     o = SimpleNamespace(
         truth_s0=truth_s0, truth_dolp=np.full((6, 6), 0.5), images={("a", "b"): ref}
     )
     plate = Plate(metal="steel", metal_n=3.6, metal_kappa=5.88)
-    panels = report._truth_panels(
-        SimpleNamespace(labels=labels, plate=plate), o, 0, None, ("a", "b")
-    )
+    panels = _truth_panels(plate, labels, o, ("a", "b"), ref_classes)
     np.testing.assert_allclose(panels["S0"], ref.s0)
     np.testing.assert_array_equal(panels["classes"], np.where(labels > 0, 2, 0))
     np.testing.assert_array_equal(panels["n"], np.where(labels > 0, 3.6, plate.paint_n))
     np.testing.assert_array_equal(panels["kappa"], np.where(labels > 0, 5.88, plate.paint_kappa))
+    assert "classes" not in _truth_panels(plate, labels, o, ("a", "b"))  # a run without classes
