@@ -27,7 +27,7 @@ from scatterlab.characterization.estimation import (
     region_posteriors,
 )
 
-__all__ = ["score_plate", "rmse", "reference_classes"]
+__all__ = ["score_plate", "rmse", "reference_classes", "pixel_scatter"]
 
 
 def rmse(a, b, sel) -> float:
@@ -170,7 +170,47 @@ def _at_bound(n, k) -> float:
     return float(on[fitted].mean())
 
 
-def _pixel_stats(maps, masks, truths):
+def pixel_scatter(stack, mask) -> float:
+    """A region's per-pixel DOLP error: the robust spread (1.4826 x the median absolute deviation from its
+    median) of its pixels' DOLP at each geometry, RMS over the geometries.
+
+    The pixels of a region are one material seen at one geometry, so their spread is what a per-pixel fit
+    meets beyond the region's common bias: the pixel noise and the restoration's spatial errors.
+
+    Parameters
+    ----------
+    stack : ndarray, shape (M, H, W)
+        Registered DOLP per geometry (NaN where undefined).
+    mask : ndarray of bool, shape (H, W)
+        The region's pixels.
+
+    Returns
+    -------
+    float
+        DOLP standard deviation (NaN when no geometry has a defined pixel).
+    """
+    spreads = []
+    for d in np.asarray(stack, float):
+        v = d[mask]
+        v = v[np.isfinite(v)]
+        if v.size:
+            spreads.append(1.4826 * np.median(np.abs(v - np.median(v))))
+    return float(np.sqrt(np.mean(np.square(spreads)))) if spreads else float("nan")
+
+
+def _pixel_bounds(truth, thetas, sigma, scatter) -> tuple:
+    """Cramer-Rao bounds (n, kappa) of one pixel of the true material at the region's pixel scatter: how
+    well any unbiased estimator could place a single pixel (inf where the design cannot)."""
+    from scatterlab.inversion.design import crlb
+
+    if not np.isfinite(scatter) or scatter <= 0:
+        return float("nan"), float("nan")
+    n, k = truth
+    b = crlb(max(n, 1e-3), k, sigma, thetas, thetas, max(scatter, 1e-12), sigma_known=True)
+    return float(b[0]), float(b[1])
+
+
+def _pixel_stats(maps, masks, truths, stack=None, thetas=None, sigma=None):
     out = {}
     for region, (tn, tk) in truths.items():
         m = masks[region]
@@ -187,6 +227,10 @@ def _pixel_stats(maps, masks, truths):
             "kappa_median_abs_error": float(np.nanmedian(np.abs(k - tk))),
             "index_median_abs_error": float(np.nanmedian(np.hypot(n - tn, k - tk))),
         }
+        if stack is not None:
+            scatter = pixel_scatter(stack, m)
+            bn, bk = _pixel_bounds((tn, tk), thetas, sigma, scatter)
+            out[region].update(pixel_dolp_scatter=scatter, pixel_crlb_n=bn, pixel_crlb_kappa=bk)
     return out
 
 
@@ -274,7 +318,8 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
         if "n_kappa" in cfg.estimate:
             stack = _stack(obs, case, kind, "dolp")
             est["maps"] = pixel_maps(stack, thetas, cfg.sigma_known)
-            for region, stats in _pixel_stats(est["maps"], masks, truths).items():
+            stats_of = _pixel_stats(est["maps"], masks, truths, stack, thetas, cfg.sigma_known)
+            for region, stats in stats_of.items():
                 cs[plate.metal if region == "metal" else region] = stats
         if "posterior" in cfg.estimate and kind != "degraded":
             stack = _stack(obs, case, kind, "dolp")

@@ -341,6 +341,47 @@ def _uses_diversity(cfg) -> bool:
     return any(w > 0 for w in (waves if isinstance(waves, list) else [waves]))
 
 
+def _pixel_bound_note(results, failed) -> str:
+    """The Cramer-Rao bound of one metal pixel at each image's own pixel scatter, for the plates whose
+    median |eta error| check failed: where it exceeds the fit's box, no estimator places a pixel."""
+    from scatterlab.inversion.least_squares import DEFAULT_BOUNDS
+
+    rows = []
+    for res in results:
+        metal = res.plate.metal
+        cases = [
+            c.split("D/r0 = ")[1].split(":")[0]
+            for c in failed
+            if "median |eta error|" in c and f"the {metal}'s" in c and c.startswith(f"{metal},")
+        ]
+        keys = ["no_turbulence"]
+        for case in cases:
+            keys += [f"D_r0_{case}_degraded", f"D_r0_{case}_corrected"]
+        parts = []
+        for key in keys:
+            d = res.metrics.get(key, {}).get(metal, {})
+            if "pixel_crlb_kappa" not in d:
+                continue
+            name = key.replace("D_r0_", "D/r0 = ").replace("_", " ")
+            parts.append(
+                f"{name} {d['pixel_dolp_scatter']:.4f}: n +-{d['pixel_crlb_n']:.3g}, "
+                f"kappa +-{d['pixel_crlb_kappa']:.3g}"
+            )
+        if cases and parts:
+            rows.append(f"{metal}: " + "; ".join(parts))
+    if not rows:
+        return ""
+    (n_lo, n_hi), (k_lo, k_hi) = DEFAULT_BOUNDS["n"], DEFAULT_BOUNDS["kappa"]
+    return (
+        "\n- **What one pixel can tell.** The Cramer-Rao bound of one pixel of the true metal, at each "
+        "image's own pixel scatter (the robust spread of the region's DOLP, RMS over the geometries): "
+        + "; ".join(rows)
+        + f". Where a bound exceeds the fit's box (n {n_lo:g}-{n_hi:g}, kappa {k_lo:g}-{k_hi:g}), no "
+        "estimator places a single pixel, and the median of the pixel fits says where in the box they "
+        "land rather than how accurate the image is."
+    )
+
+
 def _failure_notes(results, checks, ideal, estimate="blind") -> list:
     """What the failed checks mean: the cause measured in this run, or what one run can and cannot show."""
     failed = [c for c, _, ok in checks if not ok]
@@ -394,6 +435,7 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
                 "DOLP to its bounds whatever the error. The metal's measurement is its region "
                 "posterior."
             )
+            text += _pixel_bound_note(results, after)
         if any("classification" in c for c in after):
             text += (
                 "\n- **The classification** unmixes the Stokes images, which puts the plate's edges "
