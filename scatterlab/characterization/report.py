@@ -162,6 +162,12 @@ def plate_figure(out, result, cfg) -> Path:
         float(np.nanpercentile(np.sqrt(np.clip(o.images[(case, kind)].s0, 0, None)), 99.5))
         for _, case, kind in kinds
     )
+    # n and kappa on twice the plate's largest true value, within the fit's box (n 0-5, kappa 0-25): on
+    # the box alone steel's kappa of 5.88 and the paint's 0.34 were the same dark colour
+    index_top, extend = _index_scales(result.plate)
+    extend.update(
+        S0="max", DOLP="both"
+    )  # S0 clipped at its 99.5th percentile; a signed DOLP can leave [0, 1]
     for j, (key, case, kind) in enumerate(columns):
         img = o.images[(case, kind)] if key != "truth" else None
         maps = result.estimates[key].get("maps") if key != "truth" else None
@@ -190,18 +196,22 @@ def plate_figure(out, result, cfg) -> Path:
                 im = ax.imshow(
                     truth[row] if img is None else getattr(maps, row),
                     vmin=0,
-                    vmax=5 if row == "n" else 25,
+                    vmax=index_top[row],
                     cmap="magma",
                 )
             ax.set_xticks([])
             ax.set_yticks([])
             if j == len(columns) - 1 and row != "classes":
                 fig.colorbar(
-                    im, ax=axes[i, :], shrink=0.8, label={"S0": "sqrt(S0) [sqrt(e-)]"}.get(row, row)
+                    im,
+                    ax=axes[i, :],
+                    shrink=0.8,
+                    label={"S0": "sqrt(S0) [sqrt(e-)]"}.get(row, row),
+                    extend=extend[row],
                 )
-        axes[0, j].set_title(_title(key), fontsize=8)
+        axes[0, j].set_title(_title(key), fontsize=10)
     for i, row in enumerate(rows):
-        axes[i, 0].set_ylabel(row, fontsize=9)
+        axes[i, 0].set_ylabel(row, fontsize=11)
     if "classes" in rows:
         names = ["dielectric"] + (["aluminium", "iron"] if cfg.priors == "ch6" else ["metal"])
         axes[rows.index("classes"), -1].legend(
@@ -219,6 +229,22 @@ def plate_figure(out, result, cfg) -> Path:
     path = Path(out) / f"{result.plate.metal}.png"
     _save_png(fig, path)
     return path
+
+
+def _index_scales(plate) -> tuple:
+    """Colour-scale tops of the n and kappa maps -- twice the plate's largest true value, within the fit's
+    box -- and the colour bars' ``extend`` ("max" when a map can exceed its top)."""
+    from scatterlab.inversion.least_squares import DEFAULT_BOUNDS
+
+    tops, extend = {}, {}
+    for q, truths in (
+        ("n", (plate.metal_n, plate.paint_n)),
+        ("kappa", (plate.metal_kappa, plate.paint_kappa)),
+    ):
+        box = DEFAULT_BOUNDS[q][1]
+        tops[q] = float(min(box, 2.0 * max(truths))) if max(truths) > 0 else box
+        extend[q] = "max" if tops[q] < box else "neither"
+    return tops, extend
 
 
 def _truth_panels(plate, labels, o, reference, ref_classes=None) -> dict:
@@ -383,7 +409,7 @@ def acceptance_checks(cfg, results) -> list:
                     (
                         f"{p.metal}, D/r0 = {case:g}: corrected better than degraded in "
                         "classification error",
-                        f"{c['total_error']:.4f} vs {d['total_error']:.4f}",
+                        f"{c['total_error']:.4f} vs {d['total_error']:.4f}" + _pixel_counts(c, d),
                         c["total_error"] < d["total_error"],
                     )
                 )
@@ -420,6 +446,18 @@ def acceptance_checks(cfg, results) -> list:
                     )
     out += _calibration_checks(statements)
     return out
+
+
+def _pixel_counts(c, d) -> str:
+    """Two classification errors as pixel counts, "(393 vs 377 of 12 544 pixels)", when the scores say how
+    many pixels they counted (summaries before 28 Nov 2026 do not)."""
+    if "pixels" not in c or "pixels" not in d or c["pixels"] != d["pixels"]:
+        return ""
+    n = c["pixels"]
+    return (
+        f" ({round(c['total_error'] * n)} vs {round(d['total_error'] * n)} of "
+        f"{n:,} pixels)".replace(",", " ")
+    )
 
 
 def _calibration_checks(statements) -> list:

@@ -15,8 +15,9 @@ def _header(cfg, seconds, ideal) -> list:
         + f"{cfg.photons:g} photo-electrons at the brightest channel pixel, {cfg.read_noise:g} e- read noise, "
         f"{cfg.image_size}^2 pixels (2 per lambda/D), polarizers {cfg.polarizer_deg} deg, "
         + _psf_estimator(cfg)
-        + f", priors {cfg.priors}, sigma "
-        f"{cfg.sigma_known} (known), seed {cfg.seed}. Run time {seconds:.0f} s.{ideal_note}",
+        + f", priors {cfg.priors}, seed {cfg.seed}. Run time {seconds:.0f} s.{ideal_note}",
+        "",
+        _inversion_note(cfg),
         "",
         "The no-turbulence image is deconvolved with its known diffraction-limited PSF (`no turbulence`) "
         "and is the reference the others are compared with; `raw` is the same image without restoration. "
@@ -27,6 +28,31 @@ def _header(cfg, seconds, ideal) -> list:
         + " Data: `results.h5`; every number: `summary.json`.",
         "",
     ]
+
+
+def _inversion_note(cfg) -> str:
+    """What the inversion is given and what its intervals leave out: the roughness held at the truth, the
+    same pBRDF making and inverting the data, and the restoration's settings."""
+    model = (
+        "The inversion adds the tabulated pBRDF model error (scene key `model_error`)."
+        if cfg.model_error
+        else "The same pBRDF renders the scene and inverts it, with no model error "
+        "(scene key `model_error`): the paint's intervals are as narrow as the data allow, and on "
+        "measured data, where the model is only an approximation, they are wider."
+    )
+    starts = (
+        f"{cfg.blind_starts} random start PSFs per blind restoration, averaged"
+        if cfg.blind_starts > 1
+        else "one random start PSF per blind restoration"
+    )
+    return (
+        "eta = n - j kappa is the complex index of refraction. The roughness (rms facet slope "
+        f"{cfg.sigma_known:g}) is given to the inversion at its true value and only n and kappa are "
+        f"estimated. {model} Restoration: {starts}; the self-calibration re-simulates each geometry "
+        f"{cfg.calibration_replicates} times to measure the restoration's DOLP bias. The reference text is "
+        "*Determining the index of refraction of an unknown object using passive polarimetric imagery "
+        "degraded by atmospheric turbulence* (AFIT/DEE/ENG/10-12, 2010)."
+    )
 
 
 def _published_note(cfg) -> str:

@@ -30,7 +30,7 @@ def classification_errors(estimate, truth, *, metal_classes=(1,), mask=None) -> 
         ``false_metal`` and ``false_dielectric`` (fractions of all pixels), ``false_metal_rate`` (per true
         dielectric pixel) and ``false_dielectric_rate`` (per true metal pixel) -- Table 4's columns --,
         ``metal_share``, ``total_error`` (fraction of all pixels), ``correlation`` and ``rmse`` of the binary
-        maps.
+        maps, and ``pixels`` (the number scored).
     """
     e = np.isin(np.asarray(estimate), metal_classes)
     t = np.isin(np.asarray(truth), metal_classes)
@@ -58,6 +58,7 @@ def classification_errors(estimate, truth, *, metal_classes=(1,), mask=None) -> 
         "total_error": float(np.sum(e != t) / n),
         "correlation": corr,
         "rmse": float(np.sqrt(np.mean((ef - tf) ** 2))),
+        "pixels": int(n),
     }
 
 

@@ -323,3 +323,44 @@ def test_the_figures_truth_column_shows_the_object():
     np.testing.assert_array_equal(panels["n"], np.where(labels > 0, 3.6, plate.paint_n))
     np.testing.assert_array_equal(panels["kappa"], np.where(labels > 0, 5.88, plate.paint_kappa))
     assert "classes" not in _truth_panels(plate, labels, o, ("a", "b"))  # a run without classes
+
+
+def test_index_maps_are_scaled_to_the_plate_within_the_fit_box():
+    """Steel's kappa of 5.88 gets a scale of 11.76 (its bar extends beyond), aluminium's 16 the whole box
+    of 25; n is 0-5 for both (the box is below twice steel's 3.6)."""
+    from scatterlab.characterization.report import _index_scales
+    from scatterlab.characterization.scene_config import Plate
+
+    tops, extend = _index_scales(Plate(metal="steel", metal_n=3.6, metal_kappa=5.88))
+    assert tops == {"n": 5.0, "kappa": pytest.approx(11.76)}
+    assert extend == {"n": "neither", "kappa": "max"}
+    tops, extend = _index_scales(Plate(metal="aluminium", metal_n=1.44, metal_kappa=16.0))
+    assert tops["kappa"] == 25.0 and extend["kappa"] == "neither"
+    assert tops["n"] == pytest.approx(2.88) and extend["n"] == "max"
+
+
+def test_classification_comparisons_give_the_pixel_counts():
+    from scatterlab.characterization.report import _pixel_counts
+    from scatterlab.deconvolution import classification_errors
+
+    truth = np.zeros((10, 10), int)
+    truth[:, 5:] = 1
+    a, b = truth.copy(), truth.copy()
+    a[0, :3] = 1  # 3 pixels wrong
+    b[:2, :2] = 1  # 4 pixels wrong
+    ca, cb = classification_errors(a, truth), classification_errors(b, truth)
+    assert ca["pixels"] == 100
+    assert _pixel_counts(ca, cb) == " (3 vs 4 of 100 pixels)"
+    assert _pixel_counts({"total_error": 0.1}, cb) == ""  # a summary written before the count existed
+
+
+def test_the_header_says_what_the_inversion_is_given():
+    from scatterlab.characterization import default_scene
+    from scatterlab.characterization.report_text import _inversion_note
+
+    cfg = default_scene()
+    text = _inversion_note(cfg)
+    assert "rms facet slope 0.3) is given to the inversion at its true value" in text
+    assert "no model error" in text and "3 random start PSFs" in text and "4 times" in text
+    cfg.model_error = True
+    assert "adds the tabulated pBRDF model error" in _inversion_note(cfg)
