@@ -329,11 +329,12 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
     weak = [p for p, c in contraction.items() if c < DETERMINED_CONTRACTION]
     if weak:
         notes.append(
-            f"the data determine {' and '.join(weak)} only weakly (posterior contraction "
+            f"the data determine {' and '.join(weak)} only partly (posterior contraction "
             + ", ".join(contraction_text(contraction[p]) for p in weak)
-            + "; 1 = fixed by the data, 0 = the prior's spread, none = below 0.005): the marginal interval follows the "
-            "prior along a ridge of equal DOLP, and for a fixed material it does not cover at its "
-            "nominal rate. The joint (n, kappa) likelihood-ratio region is the calibrated statement"
+            + f", below {DETERMINED_CONTRACTION:g}; 1 = fixed by the data, 0 = the prior's spread, none = "
+            "below 0.005): the marginal interval follows the prior along a ridge of equal DOLP, and for a "
+            "fixed material it does not cover at its nominal rate. The joint (n, kappa) likelihood-ratio "
+            "region is the calibrated statement"
             + (
                 ""
                 if joint is None
@@ -374,6 +375,13 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
                 moved
                 + ", and a re-simulation of a plate estimated from these data recovers only part "
                 "of such a loss (studies/characterization_coverage.py), so the interval may be too narrow"
+            )
+    if data.bias is not None:
+        held = int(np.sum((data.mean <= 0.0) | (data.mean >= 1.0)))
+        if held:
+            notes.append(
+                f"the corrected DOLP left [0, 1] at {held} of {data.mean.size} geometries and is held at "
+                "the bound there (its error still carries the correction)"
             )
     return RegionEstimate(name, params, converged, notes, post.chain, data, joint)
 

@@ -263,8 +263,8 @@ def _posterior_lines(plate, psum, prior_text="") -> list:
         "the self-calibration's re-simulations, or from the pixel scatter and the edge sensitivity "
         "plus an inferred noise): median, 68 % and 95 % intervals, the truth, whether the intervals "
         "cover it, and whether the truth lies in the joint (n, kappa) likelihood-ratio region at "
-        "68 / 95 %. Where the data fix only a combination of n and kappa (a metal at these "
-        "geometries: the note below the table says so), the marginal intervals follow the prior and "
+        "68 / 95 %. Where the data fix only a combination of n and kappa (for aluminium "
+        "at these geometries; the note below the table says when), the marginal intervals follow the prior and "
         "the joint region is the calibrated statement." + (f" {prior_text}" if prior_text else ""),
         "",
         "| image | region | n [68 %] | n 95 % | kappa [68 %] | kappa 95 % | truth | covered 68 / 95 % "

@@ -351,7 +351,9 @@ def test_classification_comparisons_give_the_pixel_counts():
     ca, cb = classification_errors(a, truth), classification_errors(b, truth)
     assert ca["pixels"] == 100
     assert _pixel_counts(ca, cb) == " (3 vs 4 of 100 pixels)"
-    assert _pixel_counts({"total_error": 0.1}, cb) == ""  # a summary written before the count existed
+    assert (
+        _pixel_counts({"total_error": 0.1}, cb) == ""
+    )  # a summary written before the count existed
 
 
 def test_the_header_says_what_the_inversion_is_given():

@@ -465,10 +465,10 @@ def test_a_metal_the_data_do_not_separate_is_flagged_and_its_truth_is_in_the_joi
     ]
     metal, paint = region_posteriors(regions, th, 0.3, np.random.default_rng(3), n_steps=400)
     assert min(metal.parameters[q]["contraction"] for q in ("n", "kappa")) < 0.9
-    assert any("only weakly" in w for w in metal.warnings), metal.warnings
+    assert any("only partly" in w for w in metal.warnings), metal.warnings
     assert metal.joint["covers68"] and metal.joint["delta_chi2"] < 0.5, metal.joint
     assert paint.parameters["kappa"]["contraction"] > 0.99
-    assert not any("only weakly" in w for w in paint.warnings)
+    assert not any("only partly" in w for w in paint.warnings)
 
 
 def test_layout_refinement_restores_with_the_psf_it_found(monkeypatch):
@@ -759,3 +759,23 @@ def test_s0_error_is_blind_to_each_geometrys_exposure():
     e = _image_errors(blurred, "case", "kind", sel, away=away)
     assert e["s0_relative_rmse_truth"] > 0.05
     assert e["s0_relative_rmse_truth_away_from_edges"] < 1e-3 * e["s0_relative_rmse_truth"]
+
+
+def test_a_corrected_dolp_held_at_a_bound_is_named_in_the_regions_notes():
+    """The self-calibration clips a corrected region mean to [0, 1] (a metal's DOLP of 0.005 corrected by
+    more than itself): the posterior's notes say at how many geometries; uncorrected data get no note."""
+    from dataclasses import replace
+
+    from scatterlab.characterization.estimation import RegionData, region_posteriors
+    from scatterlab.inversion import model_dolp
+
+    th = np.radians([30.0, 40.0, 50.0, 60.0])
+    e = np.full(4, 3e-3)
+    mean = np.asarray(model_dolp(3.6, 5.88, 0.3, th, th), float)
+    plain = RegionData("metal", mean, e, e, np.zeros(4), 100, (3.6, 5.88))
+    held = replace(plain, mean=np.r_[0.0, mean[1:]], bias=np.full(4, 0.01))
+    rng = np.random.default_rng(4)
+    (a,) = region_posteriors([plain], th, 0.3, rng, n_steps=300)
+    (b,) = region_posteriors([held], th, 0.3, rng, n_steps=300)
+    assert not any("held at the bound" in w for w in a.warnings)
+    assert any("left [0, 1] at 1 of 4 geometries" in w for w in b.warnings), b.warnings
