@@ -235,6 +235,10 @@ class Registered:
         -1 where unmeasured.
     shift : ndarray, shape (2,)
         Translation applied after the keystone stretch [object pixels].
+    measured : ndarray of bool, shape (H, W), or None
+        Pixels whose values come from measured camera pixels: False where the restoration had unmeasured
+        pixels (``dolp`` NaN, ``classes`` -1 there) and where the translation brought in pixels from
+        beyond the camera's field (the images repeat the field's edge there). None: every pixel.
     """
 
     kind: str
@@ -242,6 +246,7 @@ class Registered:
     dolp: np.ndarray
     classes: np.ndarray | None
     shift: np.ndarray
+    measured: np.ndarray | None = None
 
 
 def register_restoration(
@@ -294,8 +299,18 @@ def register_restoration(
         valid = None if valid is None else apply_shift(valid, shift)
     dolp = np.where(s0 > 0, dolp, np.nan)
     cls = None if cls is None else np.rint(cls).astype(int)
+    measured = None
     if valid is not None:
         measured = valid > 0.999  # every pixel an interpolated value draws on was measured
         dolp = np.where(measured, dolp, np.nan)
         cls = None if cls is None else np.where(measured, cls, -1)
-    return Registered(rest.kind, s0, dolp, cls, shift)
+    if reference is not None:
+        # the translation brings in pixels from beyond the camera's field, which apply_shift fills by
+        # repeating the edge (shifts of 10-25 pixels are ordinary at D/r0 12.9). They keep those values
+        # (the region means and the self-calibration's re-simulations, which go through the same
+        # registration, take them alike) but are not scored as measurements. A pixel at least half inside
+        # the field counts as measured: a shift of a hundredth of a pixel leaves the edge row one.
+        inside = ndimage.shift(np.ones(s0.shape), shift, order=1, mode="grid-constant") >= 0.5
+        measured = inside if measured is None else measured & inside
+    measured = None if measured is None or measured.all() else measured
+    return Registered(rest.kind, s0, dolp, cls, shift, measured)

@@ -174,11 +174,14 @@ def plate_figure(out, result, cfg) -> Path:
         for i, row in enumerate(rows):
             ax = axes[i, j]
             if row == "S0":
-                s0 = truth["S0"] if img is None else img.s0
+                s0 = truth["S0"] if img is None else _measured_only(img.s0, img)
                 im = ax.imshow(np.sqrt(np.clip(s0, 0, None)), cmap="gray", vmin=0, vmax=s0_top)
             elif row == "DOLP":
                 im = ax.imshow(
-                    truth["DOLP"] if img is None else img.dolp, vmin=0, vmax=1, cmap="viridis"
+                    truth["DOLP"] if img is None else _measured_only(img.dolp, img),
+                    vmin=0,
+                    vmax=1,
+                    cmap="viridis",
                 )
             elif row == "classes":
                 if img is None:
@@ -186,7 +189,10 @@ def plate_figure(out, result, cfg) -> Path:
                 else:
                     classes = img.classes if key != "no_turbulence" else ref_classes
                 im = ax.imshow(
-                    classes,
+                    # not measured (-1, or beyond the camera's field): left blank
+                    np.ma.masked_array(
+                        classes, (classes < 0) | (img is not None and _unmeasured(img))
+                    ),
                     cmap=cmap_cls,
                     vmin=-0.5,
                     vmax=ncls - 0.5,
@@ -229,6 +235,19 @@ def plate_figure(out, result, cfg) -> Path:
     path = Path(out) / f"{result.plate.metal}.png"
     _save_png(fig, path)
     return path
+
+
+def _unmeasured(img):
+    """Bool (H, W) of the pixels ``img`` did not measure, or False when it measured all."""
+    m = getattr(img, "measured", None)
+    return False if m is None else ~m
+
+
+def _measured_only(values, img):
+    """``values`` with the pixels ``img`` did not measure (beyond the camera's field after registration)
+    set to NaN, which the figure leaves blank."""
+    m = getattr(img, "measured", None)
+    return values if m is None else np.where(m, values, np.nan)
 
 
 def _index_scales(plate) -> tuple:

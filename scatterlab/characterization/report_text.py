@@ -22,7 +22,9 @@ def _header(cfg, seconds, ideal) -> list:
         "The no-turbulence image is deconvolved with its known diffraction-limited PSF (`no turbulence`) "
         "and is the reference the others are compared with; `raw` is the same image without restoration. "
         "Images are keystone-corrected to object coordinates and aligned with the reference; statistics "
-        "exclude a border of 1/16 of the image, and region statistics a margin at the paint/metal edges. "
+        "exclude a border of 1/16 of the image and the pixels an alignment brings in from beyond the "
+        "camera's field (left blank in the figures), and region statistics a margin at the paint/metal "
+        "edges. "
         "This is a simulation: the truth is shown beside every estimate."
         + _published_note(cfg)
         + " Data: `results.h5`; every number: `summary.json`.",

@@ -178,6 +178,44 @@ def test_registration_finds_large_shifts_of_a_plate_whose_metal_runs_off_the_fie
     np.testing.assert_array_equal(estimate_shift(np.ones((8, 8)), np.ones((8, 8))), [0.0, 0.0])
 
 
+def test_pixels_a_registration_brings_in_from_beyond_the_field_are_not_measurements():
+    """A restoration whose content sits 4 rows and -15 columns away from the reference is aligned by
+    (-4, +15): the 15 columns on the left and the 4 rows at the bottom come from beyond the camera's field
+    (filled by repeating its edge), so they are unmeasured -- ``measured`` False, their values kept for
+    the region means, whose re-simulations are registered alike -- and the classification scores leave
+    them out; an image needing no shift has every pixel measured."""
+    from types import SimpleNamespace
+
+    from scipy import ndimage
+
+    from scatterlab.characterization.metrics import _classification
+    from scatterlab.characterization.registration import register_restoration
+
+    H = 96
+    big = np.full((2 * H, 2 * H), 1.0)
+    big[:, : H // 2 + 10] = 12.0
+    big[H // 2 - 10 : H // 2 + 20, H + 20 :] = 12.0
+    sharp = big[H // 2 : H // 2 + H, H // 2 : H // 2 + H]
+    y0, x0 = H // 2 - 4, H // 2 + 15
+    moved = ndimage.gaussian_filter(big, 6.0)[y0 : y0 + H, x0 : x0 + H]
+    cls = (moved > 6.0).astype(int)
+    rest = SimpleNamespace(kind="degraded", s0=moved, dolp=np.full((H, H), 0.5), classes=cls)
+    reg = register_restoration(rest, 0.0, sharp, foreshortened=False)
+    np.testing.assert_allclose(reg.shift, [-4.0, 15.0], atol=0.5)
+    assert not reg.measured[:, :14].any() and not reg.measured[-3:, :].any()
+    assert reg.measured[5:-5, 17:].all()
+    assert np.isfinite(reg.dolp).all() and (reg.classes >= 0).all()
+    assert register_restoration(rest, 0.0, moved, foreshortened=False).measured is None
+    assert register_restoration(rest, 0.0, None, foreshortened=False).measured is None
+    # scored against a reference that measured everything, the unmeasured pixels are left out
+    ref = SimpleNamespace(classes=(sharp > 6.0).astype(int), measured=None)
+    o = SimpleNamespace(images={("no_turbulence", "restored"): ref, ("c", "degraded"): reg})
+    result = SimpleNamespace(observations=[o], labels=(sharp > 6.0).astype(int))
+    scores = _classification(result, "c", "degraded", 0, np.ones((H, H), bool), (None, None))
+    assert scores["classification_vs_no_turbulence"]["pixels"] == int(reg.measured.sum())
+    assert scores["classification_vs_labels"]["pixels"] == int(reg.measured.sum())
+
+
 def test_deconvolutions_are_checkpointed_and_resumed(tmp_path, monkeypatch):
     """A run interrupted after some deconvolutions finished resumes from their checkpoints with identical
     results; the checkpoints go once the results are written."""
