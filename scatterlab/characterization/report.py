@@ -200,7 +200,9 @@ def plate_figure(out, result, cfg) -> Path:
                 )
             else:
                 im = ax.imshow(
-                    truth[row] if img is None else getattr(maps, row),
+                    truth[row]
+                    if img is None
+                    else _measured_everywhere(result, case, kind, maps, row),
                     vmin=0,
                     vmax=index_top[row],
                     cmap="magma",
@@ -235,6 +237,17 @@ def plate_figure(out, result, cfg) -> Path:
     path = Path(out) / f"{result.plate.metal}.png"
     _save_png(fig, path)
     return path
+
+
+def _measured_everywhere(result, case, kind, maps, row):
+    """A per-pixel map (n or kappa, fitted over all geometries) blank where any geometry's image did not
+    measure the pixel."""
+    values = np.asarray(getattr(maps, row), float)
+    for o in result.observations:
+        m = getattr(o.images[(case, kind)], "measured", None)
+        if m is not None:
+            values = np.where(m, values, np.nan)
+    return values
 
 
 def _unmeasured(img):
@@ -468,15 +481,20 @@ def acceptance_checks(cfg, results) -> list:
 
 
 def _pixel_counts(c, d) -> str:
-    """Two classification errors as pixel counts, "(393 vs 377 of 12 544 pixels)", when the scores say how
-    many pixels they counted (summaries before 28 Nov 2026 do not)."""
-    if "pixels" not in c or "pixels" not in d or c["pixels"] != d["pixels"]:
+    """Two classification errors as pixel counts, "(393 vs 377 of 12 544 pixels)", each of the pixels its
+    image measured when those differ (summaries before 28 Nov 2026 do not count them: "")."""
+    if "pixels" not in c or "pixels" not in d:
         return ""
-    n = c["pixels"]
-    return (
-        f" ({round(c['total_error'] * n)} vs {round(d['total_error'] * n)} of "
-        f"{n:,} pixels)".replace(",", " ")
-    )
+
+    def wrong(e):
+        return round(e["total_error"] * e["pixels"])
+
+    def count(n):
+        return f"{n:,}".replace(",", " ")
+
+    if c["pixels"] == d["pixels"]:
+        return f" ({wrong(c)} vs {wrong(d)} of {count(c['pixels'])} pixels)"
+    return f" ({wrong(c)} of {count(c['pixels'])} vs {wrong(d)} of {count(d['pixels'])} pixels)"
 
 
 def _calibration_checks(statements) -> list:

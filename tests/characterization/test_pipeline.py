@@ -389,9 +389,10 @@ def test_classification_comparisons_give_the_pixel_counts():
     ca, cb = classification_errors(a, truth), classification_errors(b, truth)
     assert ca["pixels"] == 100
     assert _pixel_counts(ca, cb) == " (3 vs 4 of 100 pixels)"
-    assert (
-        _pixel_counts({"total_error": 0.1}, cb) == ""
-    )  # a summary written before the count existed
+    # a summary written before the count existed
+    assert _pixel_counts({"total_error": 0.1}, cb) == ""
+    cc = classification_errors(a, truth, mask=np.arange(100).reshape(10, 10) >= 10)  # 90 scored
+    assert _pixel_counts(cc, cb) == " (0 of 90 vs 4 of 100 pixels)"
 
 
 def test_the_header_says_what_the_inversion_is_given():
