@@ -105,15 +105,23 @@ def _psf_errors(obs, case):
     """How far each geometry's PSF estimate is from the PSF the data were blurred with.
 
     L1 after the best integer shift (:func:`~scatterlab.deconvolution.psf_distance`; 0 = the true PSF,
-    2 = disjoint), the first frame's estimate when there are several.
+    2 = disjoint), the first frame's estimate when there are several; beside it the diffraction-limited
+    PSF's distance, the baseline of an estimate that knows nothing of the turbulence.
     """
     from scatterlab.deconvolution import psf_distance
 
-    d = []
+    d, base = [], []
     for o in obs:
         h = np.asarray(o.restorations[(case, "corrected")].psf)
-        d.append(psf_distance(h[0] if h.ndim == 3 else h, o.acquisitions[case].psf_true)[0])
-    return {"psf_l1_error": float(np.mean(d)), "psf_l1_error_per_geometry": d}
+        truth = o.acquisitions[case].psf_true
+        d.append(psf_distance(h[0] if h.ndim == 3 else h, truth)[0])
+        # what knowing nothing of the turbulence gives: the diffraction-limited PSF
+        base.append(psf_distance(o.acquisitions["no_turbulence"].psf_true, truth)[0])
+    return {
+        "psf_l1_error": float(np.mean(d)),
+        "psf_l1_error_per_geometry": d,
+        "psf_l1_diffraction_limited": float(np.mean(base)),
+    }
 
 
 def reference_classes(observation, priors) -> np.ndarray:
