@@ -341,7 +341,7 @@ def report_markdown(cfg, results, checks, *, seconds, ideal) -> str:
         if any("paint" in cs for cs in psum.values()):
             lines += _pixel_table(plate, psum)
         lines += _posterior_lines(plate, psum, _prior_text(res.plate))
-        lines += ["", f"![{plate}]({plate}.png)", ""]
+        lines += ["", f"![{plate}]({plate}.png)", "", _figure_caption(plate, mid_deg, cfg), ""]
     if checks:
         failed = sum(not ok for _, _, ok in checks)
         lines += [
@@ -365,6 +365,25 @@ def report_markdown(cfg, results, checks, *, seconds, ideal) -> str:
         lines += [f"| {c} | {v} | {'pass' if ok else '**FAIL**'} |" for c, v, ok in checks]
         lines += _failure_notes(results, checks, ideal, _estimate_name(cfg))
     return "\n".join(lines) + "\n"
+
+
+def _figure_caption(plate, mid_deg, cfg) -> str:
+    """What the plate figure shows, row by row and column by column."""
+    rows = "S0 (square root, one grey scale for all panels), DOLP"
+    rows += ", classes" if "classes" in cfg.estimate else ""
+    rows += (
+        ", and n and kappa fitted pixel by pixel over all geometries (scaled to twice the plate's true "
+        "values within the fit's box)"
+        if "n_kappa" in cfg.estimate
+        else ""
+    )
+    return (
+        f"*Figure: the {plate} plate at theta = {mid_deg:g} deg in object coordinates. Rows: {rows}. "
+        "Columns: the object (truth), the no-turbulence image restored with its PSF and raw, then each "
+        "D/r0's degraded and corrected images. Blank pixels were brought in from beyond the camera's "
+        "field by the alignment (not measured); an arrow on a colour bar means values beyond it are "
+        "clipped.*"
+    )
 
 
 def _estimate_name(cfg) -> str:

@@ -57,6 +57,7 @@ def test_pipeline_writes_results_and_report(tmp_path):
     base = s["plates"]["aluminium"]["D_r0_7.9_corrected"]["psf_l1_diffraction_limited"]
     assert 1.0 < base <= 2.0
     assert "PSF L1" in text
+    assert "*Figure: the aluminium plate at theta" in text and "Blank pixels" in text
     post = s["plates"]["aluminium"]["no_turbulence"]["posterior_paint"]
     for q in ("n", "kappa"):  # the truth beside every estimate, and whether each interval covers it
         e = post[q]
