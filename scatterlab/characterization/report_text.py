@@ -105,7 +105,9 @@ def _errors_table(psum, estimate="blind") -> list:
         "",
         f"PSF L1: the {estimate} estimate's distance from the PSF the data were blurred with, after the best "
         "integer shift, mean over the geometries (0 = the true PSF, 2 = disjoint); in brackets the "
-        "diffraction-limited PSF's, what an estimate that knows nothing of the turbulence would score.",
+        "diffraction-limited PSF's, what an estimate that knows nothing of the turbulence would score. "
+        "S0 rel. RMSE: the RMS difference of the flux-matched S0 from its target, divided by the target's "
+        "mean S0 over the image's interior.",
     ]
     return lines + _away_from_edges_table(psum)
 
