@@ -156,10 +156,8 @@ def _classification(result, case, kind, mid, sel, priors):
     metal = tuple(range(1, len(priors)))
     # a pixel either image did not measure (beyond the camera's field after registration, class -1 where
     # the camera's pixel was bad) is not scored
-    scored = sel & (cls >= 0) & (ref >= 0)
-    for key in {(case, kind), ("no_turbulence", "restored")}:
-        if getattr(o.images[key], "measured", None) is not None:
-            scored &= o.images[key].measured
+    own = sel & _classified(o.images[(case, kind)], cls)
+    scored = own & _classified(o.images[("no_turbulence", "restored")], ref)
     return {
         "classification_vs_no_turbulence": classification_errors(
             cls, ref, metal_classes=metal, mask=scored
@@ -168,15 +166,15 @@ def _classification(result, case, kind, mid, sel, priors):
             cls,
             (result.labels > 0).astype(int),
             metal_classes=(1,),
-            mask=_own(sel, o, case, kind, cls),
+            mask=own,
         ),
     }
 
 
-def _own(sel, o, case, kind, cls):
-    """``sel`` without the pixels the image at ``(case, kind)`` did not measure."""
-    m = getattr(o.images[(case, kind)], "measured", None)
-    return sel & (cls >= 0) & (True if m is None else m)
+def _classified(image, classes):
+    """Bool (H, W): the pixels ``image`` measured and gave a class (``classes`` >= 0)."""
+    m = getattr(image, "measured", None)
+    return (classes >= 0) & (True if m is None else m)
 
 
 def _prior_bounds(plate) -> dict | None:

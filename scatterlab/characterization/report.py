@@ -165,9 +165,8 @@ def plate_figure(out, result, cfg) -> Path:
     # n and kappa on twice the plate's largest true value, within the fit's box (n 0-5, kappa 0-25): on
     # the box alone steel's kappa of 5.88 and the paint's 0.34 were the same dark colour
     index_top, extend = _index_scales(result.plate)
-    extend.update(
-        S0="max", DOLP="both"
-    )  # S0 clipped at its 99.5th percentile; a signed DOLP can leave [0, 1]
+    # S0 is clipped at its 99.5th percentile; a signed DOLP can leave [0, 1]
+    extend.update(S0="max", DOLP="both")
     for j, (key, case, kind) in enumerate(columns):
         img = o.images[(case, kind)] if key != "truth" else None
         maps = result.estimates[key].get("maps") if key != "truth" else None

@@ -433,8 +433,7 @@ def _ml_phase(acq: Acquisition, settings: RestoreSettings, kw, grid, mode_of, se
     its = max(settings.iterations, KNOWN_PSF_ITERATIONS) if known_psf else settings.iterations
     if diversity:
         its = PHASE_DIVERSITY_FINAL_ITERATIONS
-    ml = blind_deconvolve(acq.counts, acq.angles, psf0=psf0, psf_mode=mode, iterations=its, **kw)
-    return ml, kw
+    return blind_deconvolve(acq.counts, acq.angles, psf0=psf0, psf_mode=mode, iterations=its, **kw)
 
 
 def _layout_refined(acq: Acquisition, settings: RestoreSettings, kw, start, seed: int):
@@ -501,11 +500,11 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
     runs = [
         _ml_phase(acq, settings, kw, grid, mode_of, _start_seed(seed, k)) for k in range(starts)
     ]
-    ml, kw = runs[0]
+    ml = runs[0]
     s0, dolp = ml.s0, np.where(ml.s0 > 0, ml.dolp, np.nan)
     if starts > 1:
         s0, dolp, _ = average_starts(
-            [r.s0 for r, _ in runs], [r.dolp for r, _ in runs], mask=_measured_pixels(acq)
+            [r.s0 for r in runs], [r.dolp for r in runs], mask=_measured_pixels(acq)
         )
     if not known_psf and settings.psf_refine == "layout":
         # refined once, from the starts' average (fewer ghosts for its k-means layout to take for a
