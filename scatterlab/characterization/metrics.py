@@ -28,7 +28,7 @@ from scatterlab.characterization.estimation import (
     region_posteriors,
 )
 
-__all__ = ["score_plate", "rmse", "reference_classes", "pixel_scatter"]
+__all__ = ["score_plate", "rmse", "reference_classes", "pixel_scatter", "at_fit_bound"]
 
 
 def rmse(a, b, sel) -> float:
@@ -187,18 +187,36 @@ def _prior_bounds(plate) -> dict | None:
     return {r: plate.prior_bounds(r) for r in ("metal", "paint")} if given else None
 
 
-def _at_bound(n, k) -> float:
-    """Share of fitted pixels whose n or kappa sits on a bound of the fit (the bound, not an estimate)."""
+def at_fit_bound(n, k) -> np.ndarray:
+    """Which fitted pixels have n or kappa on a bound of the per-pixel fit's box (n 0-5, kappa 0-25): the
+    bound, not an estimate (the pixel's DOLP lies beyond what the box's materials give).
+
+    Parameters
+    ----------
+    n, k : ndarray, shape (...)
+        Fitted n and kappa (NaN where not fitted).
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+        True where a fitted value sits on a bound (False where not fitted).
+    """
     from scatterlab.inversion.least_squares import DEFAULT_BOUNDS
 
-    fitted = np.isfinite(n) & np.isfinite(k)
-    if not fitted.any():
-        return 0.0
-    on = np.zeros(n.shape, bool)
+    n, k = np.asarray(n, float), np.asarray(k, float)
+    on = np.zeros(np.broadcast(n, k).shape, bool)
     for v, name in ((n, "n"), (k, "kappa")):
         lo, hi = DEFAULT_BOUNDS[name]
         on |= np.isclose(v, lo, rtol=0, atol=1e-6) | np.isclose(v, hi, rtol=0, atol=1e-6)
-    return float(on[fitted].mean())
+    return on & np.isfinite(n) & np.isfinite(k)
+
+
+def _at_bound(n, k) -> float:
+    """Share of fitted pixels whose n or kappa sits on a bound of the fit (the bound, not an estimate)."""
+    fitted = np.isfinite(n) & np.isfinite(k)
+    if not fitted.any():
+        return 0.0
+    return float(at_fit_bound(n, k)[fitted].mean())
 
 
 def pixel_scatter(stack, mask) -> float:

@@ -27,6 +27,8 @@ CLASS_COLOURS = (
     "#9e9e9e",
     "#1565c0",
 )  # dielectric (paint) green, metal grey, second metal blue
+# n and kappa map pixels whose fit stopped on the box's edge (magma has no cyan)
+AT_BOUND_COLOUR = "#00e5ff"
 
 
 class RunFolder:
@@ -136,6 +138,7 @@ def plate_figure(out, result, cfg) -> Path:
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
+    from scatterlab.characterization.metrics import at_fit_bound
     from scatterlab.plotting import headless_pyplot
 
     plt = headless_pyplot()
@@ -206,6 +209,17 @@ def plate_figure(out, result, cfg) -> Path:
                     vmax=index_top[row],
                     cmap="magma",
                 )
+                if maps is not None:
+                    # a fit that stopped on its box's edge is the bound, not an estimate: its own colour
+                    on = at_fit_bound(maps.n, maps.kappa)
+                    on &= np.isfinite(_measured_everywhere(result, case, kind, maps, row))
+                    ax.imshow(
+                        np.ma.masked_array(np.ones(on.shape), ~on),
+                        cmap=ListedColormap([AT_BOUND_COLOUR]),
+                        vmin=0,
+                        vmax=1,
+                        interpolation="nearest",
+                    )
             ax.set_xticks([])
             ax.set_yticks([])
             if j == len(columns) - 1 and row != "classes":
@@ -219,6 +233,13 @@ def plate_figure(out, result, cfg) -> Path:
         axes[0, j].set_title(_title(key), fontsize=10)
     for i, row in enumerate(rows):
         axes[i, 0].set_ylabel(row, fontsize=11)
+    if "n" in rows:
+        axes[rows.index("n"), -1].legend(
+            handles=[Patch(color=AT_BOUND_COLOUR, label="fit on its\nbox's edge")],
+            loc="center left",
+            bbox_to_anchor=(1.02, 0.5),
+            fontsize=8,
+        )
     if "classes" in rows:
         names = ["dielectric"] + (["aluminium", "iron"] if cfg.priors == "ch6" else ["metal"])
         axes[rows.index("classes"), -1].legend(

@@ -371,11 +371,16 @@ def report_markdown(cfg, results, checks, *, seconds, ideal) -> str:
 
 def _figure_caption(plate, mid_deg, cfg) -> str:
     """What the plate figure shows, row by row and column by column."""
+    from scatterlab.inversion.least_squares import DEFAULT_BOUNDS
+
+    (n_lo, n_hi), (k_lo, k_hi) = DEFAULT_BOUNDS["n"], DEFAULT_BOUNDS["kappa"]
     rows = "S0 (square root, one grey scale for all panels), DOLP"
     rows += ", classes" if "classes" in cfg.estimate else ""
     rows += (
         ", and n and kappa fitted pixel by pixel over all geometries (scaled to twice the plate's true "
-        "values within the fit's box)"
+        "values within the fit's box; cyan where the fit stopped on the box's edge, n "
+        f"{n_lo:g} or {n_hi:g}, kappa {k_lo:g} or {k_hi:g}: the best fit to that pixel's DOLP lies "
+        "beyond the box, and the value shown is the bound, not an estimate)"
         if "n_kappa" in cfg.estimate
         else ""
     )

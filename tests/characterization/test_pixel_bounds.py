@@ -89,3 +89,23 @@ def test_the_failure_note_gives_each_images_pixel_bound_for_the_failed_metal():
     assert "What one pixel can tell" not in "\n".join(
         _failure_notes([res], [cls], SimpleNamespace(psf=False))
     )
+
+
+def test_fits_that_stop_on_the_box_edge_are_told_from_estimates():
+    """A pixel whose DOLP no material in the fit's box gives (below a perfect conductor's, above the
+    dielectric's maximum) is fitted on the box's edge and flagged; noise-free steel and paint pixels are
+    fitted inside the box and not flagged; unfitted (NaN) pixels are not flagged."""
+    from scatterlab.characterization.metrics import at_fit_bound
+    from scatterlab.inversion.least_squares import DEFAULT_BOUNDS
+
+    steel = model_dolp(3.6, 5.88, SIGMA, THETAS, THETAS)
+    paint = model_dolp(1.39, 0.34, SIGMA, THETAS, THETAS)
+    beyond_metal = np.zeros_like(steel)  # no polarization at all: |eta| beyond the box
+    y = np.stack([steel, paint, beyond_metal, np.full_like(steel, np.nan)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = fit_dolp(y, THETAS, THETAS, sigma=SIGMA)
+    flagged = at_fit_bound(fit.n, fit.kappa)
+    np.testing.assert_array_equal(flagged, [False, False, True, False])
+    assert fit.kappa[2] == DEFAULT_BOUNDS["kappa"][1] or fit.n[2] in DEFAULT_BOUNDS["n"]
+    np.testing.assert_allclose([fit.n[0], fit.kappa[0]], [3.6, 5.88], rtol=1e-3)
