@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 __all__ = ["report_markdown"]
 
 
@@ -386,6 +388,10 @@ def _figure_caption(plate, mid_deg, cfg) -> str:
     )
     return (
         f"*Figure: the {plate} plate at theta = {mid_deg:g} deg in object coordinates. Rows: {rows}. "
+        f"Scale: {cfg.image_size} object pixels across; an object pixel is the patch of plate a camera "
+        "pixel sees head-on, half a lambda/D, so the diffraction-limited resolution lambda/D spans 2 "
+        "object pixels vertically (across the plane of incidence) and 2/cos(theta) horizontally "
+        f"({2 / math.cos(math.radians(mid_deg)):.1f} here), where the camera sees the plate foreshortened. "
         "Columns: the object (truth), the no-turbulence image restored with its PSF and raw, then each "
         "D/r0's degraded and corrected images. Blank pixels were brought in from beyond the camera's "
         "field by the alignment (not measured); an arrow on a colour bar means values beyond it are "

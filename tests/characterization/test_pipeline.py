@@ -410,3 +410,17 @@ def test_the_header_says_what_the_inversion_is_given():
     assert "no model error" in text and "3 random start PSFs" in text and "4 times" in text
     cfg.model_error = True
     assert "adds the tabulated pBRDF model error" in _inversion_note(cfg)
+
+
+def test_the_figure_caption_gives_the_scale_and_the_fit_bound_colour():
+    """The caption names the resolution in object pixels at the figure's angle (2 / cos 60 deg = 4.0
+    horizontally) and says what the cyan pixels of the n and kappa maps are."""
+    import dataclasses
+
+    from scatterlab.characterization import default_scene
+    from scatterlab.characterization.report_text import _figure_caption
+
+    cfg = dataclasses.replace(default_scene(), image_size=96)
+    text = _figure_caption("steel", 60, cfg)
+    assert "96 object pixels across" in text and "(4.0 here)" in text
+    assert "cyan where the fit stopped on the box's edge, n 0 or 5, kappa 0 or 25" in text
