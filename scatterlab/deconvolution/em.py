@@ -945,7 +945,9 @@ def _result(problem: _Problem, state: EMState, iterations, seconds) -> Deconvolu
     ops, alpha = problem.ops, problem.model.alpha
     aop = ops.crop(alpha) if np.ndim(alpha) else np.full((ops.H, ops.W), float(alpha))
     return DeconvolutionResult(
-        s0=ops.crop(state.s0),
+        # the FFT correlations of the multiplicative update leave round-off (|x| ~ 1e-80) where there is
+        # no light; an intensity is >= 0
+        s0=np.maximum(ops.crop(state.s0), 0.0),
         dolp=np.clip(ops.crop(state.P), 0, 1),
         aop=aop,
         psfs=state.h,

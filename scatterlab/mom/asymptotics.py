@@ -96,10 +96,22 @@ def spm1_coefficient(theta_i, theta_s, k, spectrum, polarization: str = "s", eta
     Raises
     ------
     ValueError
-        If ``k`` is not finite and > 0, or ``eta`` is not a passive index (see ``solve``).
+        If ``k`` is not finite and > 0, ``theta_i`` or ``theta_s`` is not finite within [-pi/2, pi/2], a
+        Gaussian spectrum's ``sigma_h`` is negative or ``corr_length`` not > 0, or ``eta`` is not a passive
+        index (see ``solve``).
     """
+    for name, th in (("theta_i", theta_i), ("theta_s", theta_s)):
+        th = np.asarray(th, float)
+        if not np.all(np.isfinite(th) & (np.abs(th) <= np.pi / 2)):
+            raise ValueError(
+                f"{name} must be finite and within [-pi/2, pi/2] rad (the upper half-space)"
+            )
     if isinstance(spectrum, tuple):
         sigma_h, ell = spectrum
+        if not (np.isfinite(sigma_h) and sigma_h >= 0):
+            raise ValueError(f"sigma_h (rms height) must be finite and >= 0 [m], got {sigma_h!r}")
+        if not (np.isfinite(ell) and ell > 0):
+            raise ValueError(f"corr_length must be finite and > 0 [m], got {ell!r}")
 
         def spectrum(q):
             return gaussian_spectrum(q, sigma_h, ell)

@@ -167,6 +167,11 @@ class TaperedWave:
 
     def incident_power(self, k: float) -> float:
         """Power through a horizontal line, g sqrt(pi/2) cos(theta) [1 - (1 + 2 tan^2)/(2 k^2 g^2 cos^2)]."""
+        if not (np.isfinite(k) and k > 0):
+            raise ValueError(f"k must be a finite wavenumber > 0 [1/m], got {k!r}")
         c, t = np.cos(self.theta), np.tan(self.theta)
         corr = (1 + 2 * t * t) / (2 * (k * self.g * c) ** 2) if self.correction else 0.0
+        if corr >= 1:
+            # the expansion's correction exceeds its leading term: no finite positive power
+            self.check(k)
         return float(self.g * np.sqrt(np.pi / 2) * c * (1 - corr))

@@ -41,7 +41,18 @@ def forward_backward(A, V, *, tol: float = 1e-6, max_iter: int = 50, block: int 
     info : dict
         ``converged`` (bool), ``iterations`` (int), ``updates`` (relative change of U per
         iteration), ``residual`` (final ``||A U - V|| / ||V||``), ``reason`` (str).
+
+    Raises
+    ------
+    ValueError
+        ``block`` not an integer >= 1, ``max_iter`` not an integer >= 1, ``tol`` not finite and > 0.
     """
+    if isinstance(block, bool) or not isinstance(block, (int, np.integer)) or block < 1:
+        raise ValueError(f"block must be an integer >= 1 (rows per diagonal block), got {block!r}")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
+        raise ValueError(f"max_iter must be an integer >= 1, got {max_iter!r}")
+    if not (np.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be finite and > 0 (relative change of U), got {tol!r}")
     N = A.shape[0]
     V2 = V if V.ndim == 2 else V[:, None]
     starts = list(range(0, N, block))

@@ -214,6 +214,13 @@ def test_ml_update_and_zero_photon_pixels():
     )
     for a in (res.s0, res.dolp, res.psfs):
         assert np.all(np.isfinite(a))
+    assert res.s0.min() >= 0  # no negative light where there were no photons
+    half = np.full((4, 32, 32), 100.0)
+    half[:, :, :16] = (
+        0.0  # half the field dark: round-off of the FFT correlations must not go below 0
+    )
+    res = blind_deconvolve(half, ANGLES_0_45_90_135, psf_radius=4, iterations=5)
+    assert res.s0.min() >= 0 and np.all(np.isfinite(res.s0))
 
 
 def test_adaptive_priors_recentre_on_the_histogram():

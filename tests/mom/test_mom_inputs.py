@@ -100,3 +100,30 @@ def test_checkpoint_refuses_results_from_other_inputs(tmp_path):
             incoherent_scattering(
                 args["x"], args["y"], LAM, args["theta_i"], args["theta_s"], checkpoint=path, **kw
             )
+
+
+def test_solver_blocks_powers_and_spm_angles_are_checked():
+    """A forward-backward block below 1 once returned U = 0 silently; a taper too narrow for its angle gave a
+    negative incident power; SPM1 accepted angles below the horizon and a negative rms height."""
+    from scatterlab.mom import spm1_coefficient
+    from scatterlab.mom.solvers import forward_backward
+
+    A, V = np.eye(4) * 2.0, np.ones(4)
+    for bad in (0, -3, 1.5):
+        with pytest.raises(ValueError, match="block"):
+            forward_backward(A, V, block=bad)
+    with pytest.raises(ValueError, match="tol"):
+        forward_backward(A, V, tol=np.nan)
+    U, info = forward_backward(A, V, block=2)
+    np.testing.assert_allclose(U, 0.5)
+    k = 2 * np.pi / LAM
+    with pytest.raises(ValueError, match="taper too narrow"):
+        TaperedWave(np.radians(89.9), 8.0).incident_power(k)
+    assert TaperedWave(np.radians(30), 8.0).incident_power(k) > 0
+    with pytest.raises(ValueError, match="theta_i"):
+        spm1_coefficient(2.0, 0.0, k, (0.01, 1.0))
+    with pytest.raises(ValueError, match="theta_s"):
+        spm1_coefficient(0.0, np.array([0.1, -2.0]), k, (0.01, 1.0))
+    with pytest.raises(ValueError, match="sigma_h"):
+        spm1_coefficient(0.0, 0.0, k, (-0.01, 1.0))
+    assert np.all(spm1_coefficient(0.3, np.linspace(-1.5, 1.5, 7), k, (0.01, 1.0)) >= 0)
