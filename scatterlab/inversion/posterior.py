@@ -187,9 +187,20 @@ def ensemble_rhat(chain: np.ndarray, n_ensembles: int) -> np.ndarray:
         than 4
         steps. With one ensemble only its two halves are compared (stationarity, not agreement).
     """
+    if (
+        isinstance(n_ensembles, bool)
+        or not isinstance(n_ensembles, (int, np.integer))
+        or n_ensembles < 1
+    ):
+        raise ValueError(f"n_ensembles must be an integer >= 1, got {n_ensembles!r}")
     S, WT, P = chain.shape
+    if WT % n_ensembles:
+        raise ValueError(
+            f"n_ensembles ({n_ensembles}) must divide the chain's {WT} walkers (axis 1): each ensemble has "
+            "the same number of walkers"
+        )
     half = S // 2
-    if half < 2 or WT % n_ensembles:
+    if half < 2:
         return np.full(P, np.nan)
     x = chain[: 2 * half].reshape(2, half, n_ensembles, WT // n_ensembles, P)
     pieces = np.moveaxis(x, 2, 1).reshape(2 * n_ensembles, -1, P)  # (2E, half * walkers, P)

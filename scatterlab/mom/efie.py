@@ -235,7 +235,13 @@ def impedance_matrix(c: Contour, k: float) -> np.ndarray:
     -------
     ndarray, shape (N, N), complex
         The matrix A.
+
+    Raises
+    ------
+    ValueError
+        ``k`` not finite and > 0.
     """
+    k = float(as_positive(k, "k"))
     N = c.size
     A = np.empty((N, N), complex)
     # one triangle of kR (symmetric), in row blocks to bound the temporaries

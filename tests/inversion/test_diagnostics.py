@@ -145,3 +145,12 @@ def test_a_corner_plot_of_a_collapsed_posterior_logs_nothing(caplog):
     import logging
 
     assert logging.root.manager.disable == logging.NOTSET  # logging is on again afterwards
+
+
+def test_ensemble_rhat_names_a_bad_ensemble_count():
+    """An ensemble count below 1 or one that does not divide the walkers is an error, not a silent NaN."""
+    chain = np.random.default_rng(0).normal(size=(100, 8, 2))
+    for bad in (0, -1, 3, 1.5):
+        with pytest.raises(ValueError, match="n_ensembles"):
+            ensemble_rhat(chain, bad)
+    assert np.all(ensemble_rhat(chain, 4) < 1.1)

@@ -127,3 +127,23 @@ def test_solver_blocks_powers_and_spm_angles_are_checked():
     with pytest.raises(ValueError, match="sigma_h"):
         spm1_coefficient(0.0, 0.0, k, (-0.01, 1.0))
     assert np.all(spm1_coefficient(0.3, np.linspace(-1.5, 1.5, 7), k, (0.01, 1.0)) >= 0)
+
+
+def test_quadrature_band_sampling_floor_and_wavenumber_are_checked():
+    """band = 0 changed a penetrable result and min_points_per_wavelength = -1 turned the sampling check off;
+    impedance_matrix with k = 0 divided by zero."""
+    from scatterlab.mom.efie import impedance_matrix
+
+    x, y = flat(200)
+    wave = TaperedWave(0.3, 4.0)
+    for name, kw in (
+        ("band", {"band": 0.0}),
+        ("min_points_per_wavelength", {"min_points_per_wavelength": -1.0}),
+    ):
+        with pytest.raises(ValueError, match=name):
+            solve(x, y, LAM, wave, eta=1.5, **kw)
+    from scatterlab.mom.efie import contour
+
+    for k in (0.0, -1.0, np.nan):
+        with pytest.raises(ValueError, match="k"):
+            impedance_matrix(contour(x, y), k)
