@@ -70,7 +70,12 @@ def run(ctx):
             ax = axes[i, j]
             err = {}
             for x, key in enumerate(keys):
-                d = summary["plates"][plate][key][region]
+                # null in summary.json (NaN): no pixel of the eroded region was measured at every
+                # geometry (a small image whose alignment shifted it beyond the field); shown as nan
+                d = {
+                    q: (np.nan if v is None else v)
+                    for q, v in summary["plates"][plate][key][region].items()
+                }
                 pub = TABLE5[plate][rkey].get(key)
                 tn, tk = truths[region]
                 err[key] = {
@@ -137,6 +142,11 @@ def run(ctx):
     ctx.add_image("characterization/aluminium")
     ctx.add_image("characterization/steel")
     ctx.say("\n".join(lines))
+    if any("| nan" in line for line in lines):
+        ctx.say(
+            "nan: no pixel of that region was measured at every geometry (the alignment shifted it beyond "
+            "the camera's field), so its per-pixel statistics are undefined."
+        )
     paint = {
         k: float(
             np.mean(
