@@ -201,18 +201,15 @@ def plate_figure(out, result, cfg) -> Path:
                     interpolation="nearest",
                 )
             else:
-                im = ax.imshow(
+                values = (
                     truth[row]
                     if img is None
-                    else _measured_everywhere(result, case, kind, maps, row),
-                    vmin=0,
-                    vmax=index_top[row],
-                    cmap="magma",
+                    else _measured_everywhere(result, case, kind, maps, row)
                 )
+                im = ax.imshow(values, vmin=0, vmax=index_top[row], cmap="magma")
                 if maps is not None:
                     # a fit that stopped on its box's edge is the bound, not an estimate: its own colour
-                    on = at_fit_bound(maps.n, maps.kappa)
-                    on &= np.isfinite(_measured_everywhere(result, case, kind, maps, row))
+                    on = at_fit_bound(maps.n, maps.kappa) & np.isfinite(values)
                     ax.imshow(
                         np.ma.masked_array(np.ones(on.shape), ~on),
                         cmap=ListedColormap([AT_BOUND_COLOUR]),

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_index, as_positive
+from scatterlab._checks import as_angle, as_index, as_positive
 from scatterlab.fresnel import refraction_term
 from scatterlab.mom.efie import Solution
 from scatterlab.mom.surfaces import gaussian_spectrum
@@ -100,18 +100,11 @@ def spm1_coefficient(theta_i, theta_s, k, spectrum, polarization: str = "s", eta
         Gaussian spectrum's ``sigma_h`` is negative or ``corr_length`` not > 0, or ``eta`` is not a passive
         index (see ``solve``).
     """
-    for name, th in (("theta_i", theta_i), ("theta_s", theta_s)):
-        th = np.asarray(th, float)
-        if not np.all(np.isfinite(th) & (np.abs(th) <= np.pi / 2)):
-            raise ValueError(
-                f"{name} must be finite and within [-pi/2, pi/2] rad (the upper half-space)"
-            )
+    theta_i = as_angle(theta_i, "theta_i", -np.pi / 2, np.pi / 2)
+    theta_s = as_angle(theta_s, "theta_s", -np.pi / 2, np.pi / 2)
     if isinstance(spectrum, tuple):
-        sigma_h, ell = spectrum
-        if not (np.isfinite(sigma_h) and sigma_h >= 0):
-            raise ValueError(f"sigma_h (rms height) must be finite and >= 0 [m], got {sigma_h!r}")
-        if not (np.isfinite(ell) and ell > 0):
-            raise ValueError(f"corr_length must be finite and > 0 [m], got {ell!r}")
+        sigma_h = float(as_positive(spectrum[0], "sigma_h", allow_zero=True))
+        ell = float(as_positive(spectrum[1], "corr_length"))
 
         def spectrum(q):
             return gaussian_spectrum(q, sigma_h, ell)

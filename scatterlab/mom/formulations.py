@@ -144,12 +144,8 @@ def solve(
     coefficients.
     """
     _check_choices(polarization, method, solver, eta)
-    if not (np.isfinite(band) and band > 0):
-        raise ValueError(f"band must be finite and > 0 [wavelengths], got {band!r}")
-    if not (np.isfinite(min_points_per_wavelength) and min_points_per_wavelength > 0):
-        raise ValueError(
-            f"min_points_per_wavelength must be finite and > 0, got {min_points_per_wavelength!r}"
-        )
+    as_positive(band, "band")
+    as_positive(min_points_per_wavelength, "min_points_per_wavelength")
     controls = {"solver": solver, "tol": tol, "max_iter": max_iter, "block": block}
     if eta is None and polarization == "s":
         mppw = min_points_per_wavelength

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scatterlab._checks import as_positive
+
 __all__ = ["PlaneWave", "TaperedWave"]
 
 
@@ -167,8 +169,7 @@ class TaperedWave:
 
     def incident_power(self, k: float) -> float:
         """Power through a horizontal line, g sqrt(pi/2) cos(theta) [1 - (1 + 2 tan^2)/(2 k^2 g^2 cos^2)]."""
-        if not (np.isfinite(k) and k > 0):
-            raise ValueError(f"k must be a finite wavenumber > 0 [1/m], got {k!r}")
+        k = float(as_positive(k, "k"))
         c, t = np.cos(self.theta), np.tan(self.theta)
         corr = (1 + 2 * t * t) / (2 * (k * self.g * c) ** 2) if self.correction else 0.0
         if corr >= 1:
