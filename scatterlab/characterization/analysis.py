@@ -595,16 +595,25 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
 
     plt = headless_pyplot()
     mid = _mid(ds.theta)
-    fig, axes = plt.subplots(1, 5, figsize=(17, 3.6), layout="constrained")
+    t = ds.truth
+    # a simulation's true regions beside the estimated ones (label 0 the dielectric, every other a metal)
+    true_regions = (
+        np.where(np.asarray(t.labels) > 0, 1, 0)
+        if t is not None and ds.simulated and np.shape(t.labels) == np.shape(layout)
+        else None
+    )
+    truths = _truths(ds)
     panels = [
         (np.sqrt(np.clip(images[mid].s0, 0, None)), "gray", None, "sqrt(S0)"),
         (images[mid].dolp, "viridis", (0, 1), "DOLP"),
         (layout, None, None, "regions"),
+        *([(true_regions, None, None, "true regions")] if true_regions is not None else []),
         (maps.n, "magma", (0, 5), "n"),
         (maps.kappa, "magma", (0, 25), "kappa"),
     ]
+    fig, axes = plt.subplots(1, len(panels), figsize=(3.4 * len(panels), 3.6), layout="constrained")
     for ax, (img, cmap, lim, title) in zip(axes, panels):
-        if title == "regions":
+        if title in ("regions", "true regions"):
             ax.imshow(
                 img,
                 cmap=ListedColormap(["#d81b60", "#2e7d32", "#9e9e9e"]),
@@ -627,13 +636,12 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
                 img, cmap=cmap, vmin=lim[0] if lim else None, vmax=lim[1] if lim else None
             )
             fig.colorbar(im, ax=ax, shrink=0.8)
-        ax.set(
-            title=title
-            if title in ("n", "kappa")
-            else f"{title}, theta = {np.degrees(ds.theta[mid]):.0f} deg",
-            xticks=[],
-            yticks=[],
-        )
+        if title in ("n", "kappa") and truths:
+            k = 0 if title == "n" else 1
+            title += f" (truth: paint {truths['paint'][k]:.2f}, metal {truths['metal'][k]:.2f})"
+        elif title not in ("n", "kappa", "true regions"):
+            title += f", theta = {np.degrees(ds.theta[mid]):.0f} deg"
+        ax.set(title=title, xticks=[], yticks=[])
     fig.suptitle(
         f"{ds.title or 'dataset'}: object coordinates; n, kappa per pixel from all geometries",
         fontsize=9,

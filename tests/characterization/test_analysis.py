@@ -270,3 +270,33 @@ def test_analyze_cli_censors_saturated_pixels_given_the_full_well(tmp_path, caps
     bad = ["--full-well", "-3"]
     assert main(["analyze", str(clipped), "--out", str(tmp_path / "x"), *bad]) == 2
     assert "--full-well must be a count > 0" in capsys.readouterr().err
+
+
+def test_maps_figure_shows_the_truth_beside_the_estimates():
+    # the report says a simulation's truth is beside every estimate: the figure has the true regions next to
+    # the estimated ones and the true n, kappa in the map titles; measured data get neither
+    from types import SimpleNamespace
+
+    from scatterlab.characterization.analysis import _maps_figure
+
+    H = 8
+    layout = np.zeros((H, H), int)
+    layout[:, 4:] = 1
+    img = SimpleNamespace(s0=np.ones((H, H)), dolp=np.full((H, H), 0.5))
+    maps = SimpleNamespace(n=np.full((H, H), 1.5), kappa=np.full((H, H), 0.3))
+    truth = SimpleNamespace(
+        labels=layout, names=("paint", "metal"), n=(1.39, 1.44), kappa=(0.34, 16.0)
+    )
+    figs = []
+    for simulated in (True, False):
+        ds = SimpleNamespace(
+            theta=np.radians([40.0, 55.0]),
+            truth=truth if simulated else None,
+            simulated=simulated,
+            title="t",
+        )
+        _maps_figure(".", [img, img], layout, maps, ds, lambda fig, path: figs.append(fig))
+    titles = [[ax.get_title() for ax in fig.axes if ax.get_title()] for fig in figs]
+    assert "true regions" in titles[0] and "n (truth: paint 1.39, metal 1.44)" in titles[0]
+    assert "kappa (truth: paint 0.34, metal 16.00)" in titles[0]
+    assert "true regions" not in titles[1] and "n" in titles[1] and "kappa" in titles[1]
