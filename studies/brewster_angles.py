@@ -9,6 +9,7 @@ Run time, measured on the shared 2-core machine at load ~14: full 3 s.
 """
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab import fresnel, materials
 
@@ -84,4 +85,19 @@ def run(ctx):
         f"(largest R_p there: {ctx.metrics['max_Rp_at_brewster_lossless']:.1e}). For metals the "
         "pseudo-Brewster angle lies close to grazing and R_p stays large, which is why specular DOLP "
         "separates metals from dielectrics (Ch. V). Data sources are listed in metrics.json."
+    )
+
+    def span(kind, key):
+        vals = [r[key] for r in rows if r["kind"] == kind]
+        return (min(vals), max(vals)) if vals else (float("nan"), float("nan"))
+
+    b_lo, b_hi = span("Brewster", "angle_deg")
+    p_lo, p_hi = span("pseudo-Brewster", "angle_deg")
+    r_lo, r_hi = span("pseudo-Brewster", "Rp_min")
+    set_verdict(
+        ctx,
+        "own study",
+        f"{len(rows)} material/wavelength rows: Brewster {b_lo:.1f}-{b_hi:.1f} deg (lossless, largest R_p "
+        f"there {ctx.metrics['max_Rp_at_brewster_lossless']:.1e}); pseudo-Brewster {p_lo:.1f}-{p_hi:.1f} deg "
+        f"(absorbing, R_p minimum {r_lo:.2g}-{r_hi:.2g})",
     )

@@ -197,6 +197,7 @@ model reproduces their MCMC coverage of n) gives no-turbulence paint n 0.67 and 
 """
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.characterization import Plate, default_scene, run_plate
 from scatterlab.characterization.estimation import DETERMINED_CONTRACTION
@@ -525,6 +526,19 @@ def run_coverage(ctx, geometry_deg, d_over_r0, n_seeds=None, *, matched_prior=Fa
         + "\n".join(lines)
         + f"\n\nVerdict: {verdict}."
         + per_metal_text
+    )
+    rates68 = [row["ci68"]["rate"] for row in cov.values() if not row.get("recorded_only")]
+    judged = [k for k, row in cov.items() if row["judged"]]
+    set_verdict(
+        ctx,
+        "own study",
+        f"{n_seeds} trials: 68 % intervals cover {np.nanmin(rates68):.2f}-{np.nanmax(rates68):.2f} over "
+        f"{len(rates68)} families (nominal 0.68, 2 binomial SE {2 * se68:.2f}); "
+        + (
+            f"{len(judged) - len(bad)} of {len(judged)} judged families within 2 SE at 68 and 95 %"
+            if judged and not ctx.quick
+            else "not judged (too few trials)"
+        ),
     )
 
 

@@ -107,7 +107,7 @@ under a load average of 4.
 import warnings
 
 import numpy as np
-from scatterlab.studies._common import plt
+from scatterlab.studies._common import plt, set_verdict
 
 from scatterlab.mom import TaperedWave, correlation_length_for_slope, rough_surface, solve
 from scatterlab.pbrdf import Model
@@ -1039,6 +1039,19 @@ def analyse(ctx, runs, theta_i, length, reals, draws, grazing=(None, None)):
     _report_posterior(ctx, pbias, pcover, cell_list)
     if grazing[0]:
         _report_grazing(ctx, grazing_summary(*grazing))
+    m = ctx.metrics
+    set_verdict(
+        ctx,
+        "own study",
+        "largest specular DOLP error of the 1-D model vs MoM: "
+        + ", ".join(f"{n} {m[f'{n}_max_abs_dolp_error']:.3f}" for n, _, _ in MATERIALS)
+        + (
+            "; posterior coverage not judged in quick mode (smoke test)"
+            if ctx.quick
+            else f"; emcee 95 % coverage of (n, kappa) {m['posterior_coverage95_without']:.0%} without, "
+            f"{m['posterior_coverage95_pipeline']:.0%} with the model-error term (pipeline form)"
+        ),
+    )
 
 
 def _metrics(ctx, summary, bias, cover, energy, cell_list, theta_i, length, reals, iron_check):

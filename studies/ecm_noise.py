@@ -6,7 +6,7 @@ machine): 39 s wall.
 """
 
 import numpy as np
-from scatterlab.studies._common import calibrate, imperfect_1064_instrument
+from scatterlab.studies._common import calibrate, imperfect_1064_instrument, set_verdict
 
 from scatterlab.ellipsometry import switched_wave_plate_psa, switched_wave_plate_psg
 from scatterlab.plotting import headless_pyplot as plt
@@ -73,4 +73,11 @@ def run(ctx):
         f"per level. Using the nominal "
         f"design matrices leaves a systematic error of {rms['nominal W, A'][0]:.1e} that no amount of averaging "
         "removes: the retardance and azimuth errors of the wave plates and the polarizers' extinction."
+    )
+    set_verdict(
+        ctx,
+        "own study",
+        f"ECM error {ratio[moderate].min():.2f}-{ratio[moderate].max():.2f}x the true-W, A floor for noise "
+        f"{noises[0]:.0e}-{noises[moderate][-1]:.0e} (goal <= 1.5), log-log slope {slope:.2f}; nominal W, A "
+        f"leave {rms['nominal W, A'][0]:.1e}",
     )

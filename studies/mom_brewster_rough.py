@@ -14,7 +14,7 @@ machine): 93 s wall.
 """
 
 import numpy as np
-from scatterlab.studies._common import plt
+from scatterlab.studies._common import plt, set_verdict
 
 from scatterlab.fresnel import reflectances
 from scatterlab.mom import TaperedWave, correlation_length_for_slope, rough_surface, solve
@@ -99,4 +99,11 @@ def run(ctx):
         f"{100 * b['max_relative_deviation_R_s_from_flat']:.0f} % (slope 0.3) of the "
         f"flat Fresnel value. Energy (R + T = 1) holds to {energy:.1e} in every solve; {reals} "
         f"realization(s) of {length:.0f} wavelengths per slope."
+    )
+    set_verdict(
+        ctx,
+        "own study",
+        f"rough-glass p-pol minimum R_p {a['min_R_p']:.1e} at {a['angle_of_min_R_p_deg']:.0f} deg (slope 0.1), "
+        f"{b['min_R_p']:.1e} at {b['angle_of_min_R_p_deg']:.0f} deg (slope 0.3) vs flat Fresnel {rp[4]:.1e} at "
+        f"55 deg; R + T = 1 to {energy:.1e}",
     )

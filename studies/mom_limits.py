@@ -13,6 +13,7 @@ Quick mode: fewer realizations and radii (about 30 s); full mode about 3 minutes
 """
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.mom.asymptotics import compare_physical_optics, compare_spm1
 from scatterlab.plotting import headless_pyplot as plt
@@ -79,4 +80,12 @@ def run(ctx):
         f"{po['p'][-1]['back_over_pi_a']:.4f} (p) at ka = {kas[-1]}. Kirchhoff omits the "
         "shadow-boundary and creeping currents, which are stronger for the p-pol (Neumann) "
         "problem, so p converges more slowly."
+    )
+    set_verdict(
+        ctx,
+        "own study",
+        "MoM / SPM1 incoherent power "
+        + ", ".join(f"{k} {v:.3f}" for k, v in ratios.items())
+        + f"; PEC cylinder vs physical optics at ka {kas[-1]}: relative L2 {po['s'][-1]['l2_vs_po']:.3f} (s), "
+        f"{po['p'][-1]['l2_vs_po']:.3f} (p)",
     )

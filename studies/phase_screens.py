@@ -6,6 +6,7 @@ machine): 261 s wall.
 """
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.imaging import turbulence as T
 from scatterlab.plotting import headless_pyplot as plt
@@ -54,4 +55,12 @@ def run(ctx):
         "variances are integrated (not point-sampled) the ratio is "
         f"{m['min_ratio_2px_to_half_subharmonics']:.3f}-{m['max_ratio_2px_to_half_subharmonics']:.3f} "
         f"({count} screens; the statistical error at D/2 is a few per cent in quick mode)."
+    )
+    set_verdict(
+        ctx,
+        "own study",
+        f"structure function / 6.88 (r/r0)^(5/3), 2 px to D/2: plain FFT "
+        f"{m['min_ratio_2px_to_half_plain']:.2f}-{m['max_ratio_2px_to_half_plain']:.2f}, with subharmonics "
+        f"{m['min_ratio_2px_to_half_subharmonics']:.3f}-{m['max_ratio_2px_to_half_subharmonics']:.3f} "
+        f"({count} screens of {n} px)",
     )

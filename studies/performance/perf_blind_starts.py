@@ -33,6 +33,7 @@ what one blind PSF cannot undo at all.
 import time
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.characterization import acquire, default_scene
 from scatterlab.characterization.estimation import default_margin, region_masks
@@ -191,3 +192,15 @@ def run(ctx):
             "of one start."
         )
     ctx.say(" ".join(lines))
+    parts = []
+    for dr0 in cfg.d_over_r0:
+        one, top = (
+            next(r for r in rows if r["d_over_r0"] == dr0 and r["starts"] == K)
+            for K in (1, max(ks))
+        )
+        parts.append(
+            f"D/r0 {dr0:g}: S0 error away from edges {one['s0_relative_rmse_away_from_edges']:.3f} (K = 1) -> "
+            f"{top['s0_relative_rmse_away_from_edges']:.3f} (K = {max(ks)}) at {top['time_ratio_to_one_start']:.1f}x "
+            f"the time, DOLP RMSE {one['dolp_rmse']:.3f} -> {top['dolp_rmse']:.3f}"
+        )
+    set_verdict(ctx, "own study", "; ".join(parts))

@@ -23,6 +23,7 @@ the quick mode (48 x 48, F = 3, R = 0 and 8) runs in the tests.
 import time
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 from scatterlab.studies.performance.perf_layout_psf import painted_plate_object
 from scipy.ndimage import binary_erosion
 
@@ -224,3 +225,24 @@ def run(ctx):
             f"{rp['time_ratio_to_blind_em']:.0f}x the blind EM's time."
         )
     ctx.say(" ".join(lines))
+
+    def pick(F, layout, R):
+        return next(
+            r for r in rows if r["frames"] == F and r["layout"] == layout and r["rounds"] == R
+        )
+
+    Fm = max(frame_counts)
+    r0, rp = pick(Fm, "blind EM", 0), pick(Fm, "pure", top)
+    set_verdict(
+        ctx,
+        "own study",
+        f"PSF L1 blind EM -> pure layout ({top} rounds): "
+        + ", ".join(
+            f"F = {F}: {pick(F, 'blind EM', 0)['psf_l1_error']:.2f} -> "
+            f"{pick(F, 'pure', top)['psf_l1_error']:.2f}"
+            for F in frame_counts
+        )
+        + f"; with F = {Fm}: paint DOLP error {rp['paint_dolp_error']:+.3f}, DOLP RMSE off the edges "
+        f"{r0['dolp_rmse_off_edges']:.3f} -> {rp['dolp_rmse_off_edges']:.3f}, "
+        f"{rp['time_ratio_to_blind_em']:.0f}x the blind EM's time",
+    )

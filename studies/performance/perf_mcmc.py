@@ -15,6 +15,7 @@ import time
 import warnings
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.inversion import ConvergenceWarning, model_dolp, sample_posterior
 from scatterlab.plotting import headless_pyplot as plt
@@ -92,4 +93,12 @@ def run(ctx):
         f"effective samples per second {e['kde']:.0f}, {e['de']:.0f}, {e['stretch']:.0f}. "
         f"The most effective samples per second in this run: {max(e, key=e.get)}. The quantile error falls "
         "with chain length as the figure shows; below a few tau it is dominated by the start."
+    )
+    set_verdict(
+        ctx,
+        "own study",
+        f"{lengths[-1]} steps: effective samples/s KDE + DE {e['kde']:.0f}, DE {e['de']:.0f}, stretch "
+        f"{e['stretch']:.0f} (tau {t['kde']:.0f}, {t['de']:.0f}, {t['stretch']:.0f} steps); quantile error "
+        + ", ".join(f"{k} {r[-1]['quantile_error_sd']:.2f}" for k, r in rows.items())
+        + " posterior sd",
     )

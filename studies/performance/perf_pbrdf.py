@@ -10,6 +10,7 @@ machine): 9 s wall.
 """
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.pbrdf import Model
 from scatterlab.plotting import headless_pyplot as plt
@@ -109,3 +110,13 @@ def run(ctx):
                 "further."
             )
     ctx.say(text)
+    headline = f"in-plane DOLP {ours['in-plane DOLP']:.2g}/s (goal >= 1e6/s)"
+    if peer_rate:
+        headline += (
+            f"; vs pySCATMECH (per call): 4x4 Mueller {ours['4x4'] / peer_rate:.1f}x, 3x3 "
+            f"{ours['3x3'] / peer_rate:.1f}x (goal >= 20x) at max difference "
+            f"{ctx.metrics['max_difference_relative_to_m00']:.1e} of m00"
+        )
+    else:
+        headline += "; pySCATMECH not installed, no peer ratio"
+    set_verdict(ctx, "own study", headline)

@@ -6,6 +6,7 @@ machine): 60 s wall.
 """
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.imaging import turbulence as T
 from scatterlab.plotting import headless_pyplot as plt
@@ -97,6 +98,16 @@ def run(ctx):
         )
         + "."
     )
+    headline = "64 px, largest relative error of D vs theory: " + ", ".join(
+        f"{r['levels']} levels {r['max_rel_error_2px_to_half']:.3f}" for r in rows
+    )
+    if all("speedup" in v for v in speed.values()):
+        headline += "; vs AOtools ft_sh_phase_screen " + ", ".join(
+            f"{n} px {v['speedup']:.1f}x" for n, v in speed.items()
+        )
+    else:
+        headline += "; AOtools not installed, no peer ratio"
+    set_verdict(ctx, "own study", headline)
     if all("speedup" in v for v in speed.values()):
         ctx.say(
             "Speed against AOtools' ft_sh_phase_screen (same run): "

@@ -6,6 +6,8 @@ Full-mode run time (measured 24 Nov 2026, serial, load average 3.8-3.7 on the sh
 machine): 5 s wall.
 """
 
+from scatterlab.studies._common import set_verdict
+
 from scatterlab.imaging import (
     ANGLES_0_45_90_135,
     channel_images,
@@ -67,4 +69,11 @@ def run(ctx):
         f"{GOAL_S:g} s at {GOAL_SIZE}: {'met' if total < GOAL_S else 'NOT met'}): "
         + ", ".join(f"{k} {v * 1e3:.0f} ms" for k, v in sw.times.items())
         + "."
+    )
+    slowest = max(sw.times, key=sw.times.get)
+    set_verdict(
+        ctx,
+        "own study",
+        f"4-channel {size} x {size} scene in {total:.2f} s (best of {repeat}; goal < {GOAL_S:g} s: "
+        f"{'met' if total < GOAL_S else 'NOT met'}); slowest step {slowest} {sw.times[slowest] * 1e3:.0f} ms",
     )

@@ -33,6 +33,7 @@ less than the baseline's cost.
 import time
 
 import numpy as np
+from scatterlab.studies._common import set_verdict
 
 from scatterlab.characterization import Plate, default_scene
 from scatterlab.characterization import self_calibration as sc
@@ -180,4 +181,13 @@ def run(ctx):
             for r in rows
         )
         + ". An rms z near 1 means the stated error matches the residuals."
+    )
+    R = 4 if 4 in replicates else replicates[-1]  # the scene default (calibration_replicates)
+    ref = next(r for r in rows if r["bootstrap"] == f"reference R={R}")
+    set_verdict(
+        ctx,
+        "own study",
+        f"paint DOLP uncorrected {raw.mean():+.2f} (relative); reference plate R = {R}: mean "
+        f"{ref['mean_rel_error']:+.3f}, rms {ref['rms_rel_error']:.3f}, rms z {ref['rms_z']:.2f} at "
+        f"x{ref['time_vs_baseline']:.2f} the in-data baseline's time (its rms z {base['rms_z']:.2f})",
     )
