@@ -3,8 +3,9 @@
 The extreme matrix of issue 20: theta from 0 to exactly 90 deg (and 89.99), sigma from 1e-3 to 1.5,
 kappa from 0 to 1e3, n below 1, |eta| from 1e-8 to 1e6 (all phases of a passive medium), the three
 shadowing functions and three diffuse terms. Asserted: finiteness, bounds (reflectances and DOLP in
-[0, 1], DOLP NaN exactly where there is no light), Mueller realizability (Cloude), energy (shadowed
-DHR <= 1; no medium reflects more than a perfect conductor), reciprocity of the specular term.
+[0, 1], DOLP NaN exactly where there is no light, the facet's where the lobe diverges at exact
+grazing), Mueller realizability (Cloude), energy (shadowed DHR <= 1; no medium reflects more than a
+perfect conductor), reciprocity of the specular term.
 Examples are derandomized (fixed seed) so a failure reproduces.
 """
 
@@ -79,7 +80,10 @@ def test_pbrdf_finite_realizable_bounded(eta, theta_i, theta_r, phi, sigma, shad
     if F[0, 0] > 0:
         assert polarization.is_physical_mueller(F / F[0, 0], atol=1e-9)
     d = m.dolp(eta, theta_i, theta_r, phi)
-    if F[0, 0] > 0:
+    if m.diverges(theta_i, theta_r, phi) and eta != 1:
+        # the lobe diverges at exact grazing: F holds 0 for it, the DOLP is its limit, the facet's
+        assert d == pytest.approx(facet_dolp(eta, theta_i, theta_r, phi), abs=1e-12)
+    elif F[0, 0] > 0:
         assert 0 <= d <= 1
         assert d == pytest.approx(np.hypot(F[1, 0], F[2, 0]) / F[0, 0], abs=1e-9)
     else:

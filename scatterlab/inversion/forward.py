@@ -30,7 +30,7 @@ from scipy.interpolate import CubicSpline
 from scatterlab._checks import as_angle
 from scatterlab.fresnel import smooth_dolp
 from scatterlab.pbrdf import Model, facet_dolp, shadowing_strategy
-from scatterlab.pbrdf.geometry import facet_geometry
+from scatterlab.pbrdf.geometry import facet_geometry, polar_cos
 
 __all__ = ["DolpForward"]
 
@@ -65,7 +65,7 @@ class DolpForward:
         self.theta_i, self.theta_r, self.phi = ti, tr, ph
         self.model_kw = model_kw
         self.inplane = bool(np.all(ph == np.pi))
-        self.cos_beta = np.cos((ti + tr) / 2)
+        self.cos_beta = polar_cos((ti + tr) / 2)  # exactly 0 where both directions are grazing
         self.sin2_beta = np.sin((ti + tr) / 2) ** 2
         self.sigma_known = None if sigma is None else np.asarray(sigma, float)
         self._fixed_fraction = None if sigma is None else self.fraction(self.sigma_known)[0]
@@ -110,6 +110,8 @@ class DolpForward:
                 None  # Smith's G depends on sigma; the reciprocal D has kinks a linear table smears
             )
         ti, tr, ph = self.theta_i, self.theta_r, self.phi
+        # where the lobe diverges at exact grazing (log Gamma = -inf there) the fraction is its limit, 1
+        self._diverges = Model(1.0, **self.model_kw).diverges(ti, tr, ph)
         lg1, _ = Model(1.0, **self.model_kw).log_lobe_terms(ti, tr, ph)
         t2 = facet_geometry(ti, tr, ph, checked=True).tan2_alpha
         self._t2 = np.where(np.isfinite(t2), t2, 0.0)
@@ -148,6 +150,7 @@ class DolpForward:
         tot = G + D
         safe = np.where(tot > 0, tot, 1.0)
         R = np.where(tot > 0, G / safe, np.where(D > 0, 0.0, 1.0))
+        R = np.where(self._diverges, 1.0, R)
         if not gradient:
             return R, None
         dG = G * (self._t2 / s**3 - 2 / s)
@@ -158,7 +161,8 @@ class DolpForward:
             + (3 * f2 - 2 * f) * m1
         )
         dD = np.where((D0 > 0) & (D1 > 0), np.where(near_zero, D1 - D0, dcubic), 0.0) / (h * s)
-        return R, np.where(tot > 0, (dG * D - G * dD) / (safe * safe), 0.0)
+        dR = np.where(tot > 0, (dG * D - G * dD) / (safe * safe), 0.0)
+        return R, np.where(self._diverges, 0.0, dR)
 
     def fraction(self, sigma, *, gradient: bool = False):
         """Specular fraction Gamma/(Gamma + D) (..., M) and, with ``gradient``, its sigma derivative (..., M).
@@ -166,7 +170,9 @@ class DolpForward:
         For Beckmann slopes, Torrance-Sparrow (or no) shadowing and the "hyde" diffuse term: Gamma
         exactly (analytic in sigma) and D
         interpolated (cubic Hermite) in log sigma on 4097 nodes over [1e-3, 2.5] (measured error in the tests);
-        otherwise Model.specular_fraction with a central difference.
+        otherwise Model.specular_fraction with a central difference. 1 where both terms vanish and where the
+        lobe diverges at an exactly grazing direction (:meth:`scatterlab.pbrdf.Model.diverges`), as
+        Model.specular_fraction.
         """
         sigma = np.asarray(sigma, float)
         if not hasattr(self, "_table"):

@@ -36,7 +36,7 @@ from scatterlab._checks import as_angle, as_positive, check_starts
 from scatterlab.inversion.design import inverse_information
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.inversion.options import DEFAULT_STARTS, FitOptions, resolve_options
-from scatterlab.pbrdf import Model
+from scatterlab.pbrdf import Model, facet_dolp
 
 __all__ = [
     "fit_dolp",
@@ -90,7 +90,15 @@ def model_dolp(n, kappa, sigma, theta_i, theta_r, phi=np.pi, **model_kw) -> np.n
     Returns
     -------
     ndarray (..., M)
-        DOLP in [0, 1] (dimensionless).
+        DOLP in [0, 1] (dimensionless), never NaN: the formula the fits use
+        (:class:`~scatterlab.inversion.forward.DolpForward`). It is :meth:`scatterlab.pbrdf.Model.dolp`
+        wherever light is reflected, its limit at an exactly grazing direction where the specular
+        term diverges, and where no light is reflected (``F00 = 0``, where ``Model.dolp`` is NaN: ``eta
+        = 1`` exactly, no interface; or both terms of the pBRDF vanish or underflow, e.g. far from the
+        lobe of a smooth surface) the zero-light convention of ``DolpForward``: the facet's DOLP
+        (:func:`~scatterlab.pbrdf.facet_dolp`, continuous at ``eta = 1``) times the specular fraction
+        (:meth:`~scatterlab.pbrdf.Model.specular_fraction`, 1 where both terms vanish). At ``eta = 1``
+        this is the limit ``eta -> 1``.
 
     Raises
     ------
@@ -100,7 +108,14 @@ def model_dolp(n, kappa, sigma, theta_i, theta_r, phi=np.pi, **model_kw) -> np.n
     n = np.maximum(as_positive(n, "n", allow_zero=True), 1e-6)[..., None]
     kappa = as_positive(kappa, "kappa", allow_zero=True)[..., None]
     sigma = np.asarray(sigma, float)[..., None]
-    return Model(sigma, **model_kw).dolp(n - 1j * kappa, theta_i, theta_r, phi)
+    model = Model(sigma, **model_kw)
+    eta = n - 1j * kappa
+    d = model.dolp(eta, theta_i, theta_r, phi)
+    dark = np.isnan(d)  # no reflected light: the DOLP of the light is undefined, the formula is not
+    if np.any(dark):
+        fraction = model.specular_fraction(theta_i, theta_r, phi)
+        d = np.where(dark, facet_dolp(eta, theta_i, theta_r, phi) * fraction, d)
+    return d
 
 
 @dataclass

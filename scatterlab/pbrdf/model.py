@@ -37,9 +37,16 @@ Grazing directions. ``theta = pi/2`` (the float) is exactly grazing (``cos theta
 ``phi = pi`` exactly the specular plane, on every evaluation path, so a result never depends on
 the rest of the batch. Where the specular term's limit at an exactly grazing direction is finite
 (Torrance-Sparrow or Smith with the other direction above the horizon) it is that limit; where the
-model diverges there (both directions grazing: no facet joins two opposite horizon directions; any
-grazing direction without shadowing) the specular term is defined as 0, the value of a direction
-with no projected area. The divergence is integrable: the DHR stays finite.
+model diverges there (both directions grazing and opposite, ``theta_i = theta_r = pi/2`` with
+``phi = pi``: no facet joins two opposite horizon directions, and the lobe grows like
+:math:`1/\cos^2\theta` towards them; any grazing direction without shadowing, like
+:math:`1/\cos\theta`) the limit of ``F`` is infinite, and the specular term of :meth:`Model.mueller`
+is defined as 0 there, the value of a direction with no projected area (so ``F`` stays finite and
+``F00`` does not continue the values just above the horizon). The divergence is integrable: the DHR
+stays finite. The ratios have finite limits there, and :meth:`Model.dolp`, :meth:`Model.aop` and
+:meth:`Model.specular_fraction` return them: the specular term dominates, so the DOLP and AOP are the
+facet's (:func:`~scatterlab.pbrdf.dolp.facet_dolp`; a DOLP of 0 where both directions are grazing
+and opposite, facet angle 90 deg) and the specular fraction is 1. :meth:`Model.diverges` says where.
 
 DOLP and AOP of zero light are NaN: where :math:`F_{00} = 0` (no interface, ``eta = 1``; or the
 specular term vanishes without a diffuse term).
@@ -58,7 +65,7 @@ import numpy as np
 from scatterlab._checks import as_angle, as_index
 from scatterlab.pbrdf.dhr import SpecularDHR, dhr_slope_quadrature
 from scatterlab.pbrdf.distributions import Beckmann, FacetDistribution
-from scatterlab.pbrdf.dolp import facet_jones
+from scatterlab.pbrdf.dolp import facet_dolp, facet_jones
 from scatterlab.pbrdf.geometry import check_angles, facet_geometry, in_plane_geometry
 from scatterlab.pbrdf.shadowing import shadowing_strategy
 from scatterlab.polarization import dolp as stokes_dolp
@@ -149,6 +156,52 @@ class Model:
         return np.where(
             ok, g * (1 + np.where(ok, t2, 0.0)) ** 2 / 4, 0.0
         )  # 1/cos^4 = (1 + tan^2)^2
+
+    def _diverges(self, geo, ti, tr) -> np.ndarray:
+        """Where the specular term diverges at an exactly grazing direction (:meth:`diverges`)."""
+        grazing = (ti == np.pi / 2) | (tr == np.pi / 2)
+        if not np.any(grazing):
+            return grazing
+        g = self.shadowing_function.g_over_cos(geo, self._slopes)
+        # both grazing and opposite (no facet normal, cos beta = 0), or G/(cos cos) = inf where a facet exists
+        return grazing & ((geo.cos_beta == 0) | (np.isfinite(geo.tan2_alpha) & ~np.isfinite(g)))
+
+    def diverges(self, theta_i, theta_r, phi=np.pi) -> np.ndarray:
+        """Where the specular term diverges at an exactly grazing direction.
+
+        Both directions grazing and opposite (``theta_i = theta_r = pi/2``, ``phi = pi``), for every
+        shadowing; and, with ``shadowing="none"``, any exactly grazing direction (``pi/2``, the float)
+        with the other direction above the horizon. There :meth:`mueller` holds 0 for the specular
+        term (its limit is infinite), while :meth:`dolp`, :meth:`aop` and :meth:`specular_fraction`
+        return their finite limits (module docstring, "Grazing directions").
+
+        Parameters
+        ----------
+        theta_i, theta_r : array_like [rad] in ``[0, pi/2]``
+        phi : array_like [rad], default ``pi`` (specular plane).
+
+        Returns
+        -------
+        ndarray of bool, the broadcast shape of the angles and ``sigma``.
+        """
+        _, ti, tr, ph = self._prepare(PEC, theta_i, theta_r, phi)
+        return self._diverges(_geometry(ti, tr, ph), ti, tr)
+
+    def _divergent_points(self, eta, theta_i, theta_r, phi):
+        """Points where the specular term diverges and light is reflected (``eta != 1``).
+
+        Returns None if there are none, else ``(mask, eta, theta_i, theta_r, phi)``: the mask over the
+        broadcast shape and the validated inputs at those points.
+        """
+        if not any(np.any(np.asarray(t, float) == np.pi / 2) for t in (theta_i, theta_r)):
+            return None  # no grazing direction (the common case): no second validation
+        eta, ti, tr, ph = self._prepare(eta, theta_i, theta_r, phi)
+        mask = self._diverges(_geometry(ti, tr, ph), ti, tr)
+        if not isinstance(eta, str):
+            mask = mask & (eta != 1)  # no interface: no light, NaN (module docstring)
+        if not np.any(mask):
+            return None
+        return mask, (eta if isinstance(eta, str) else eta[mask]), ti[mask], tr[mask], ph[mask]
 
     def _gamma(self, geo) -> np.ndarray:
         """Gamma of Eq. 204 (general distribution and shadowing) [1/sr]."""
@@ -254,6 +307,10 @@ class Model:
     def mueller(self, eta, theta_i, theta_r, phi) -> np.ndarray:
         """Mueller-matrix pBRDF ``F`` [1/sr], shape ``(..., 4, 4)`` (Eqs. 173, 177).
 
+        Where the specular term diverges at an exactly grazing direction (:meth:`diverges`) it is
+        defined as 0: ``F`` there is the diffuse term alone, not the infinite limit (module docstring,
+        "Grazing directions").
+
         Parameters
         ----------
         eta : complex array_like or "pec"
@@ -279,6 +336,9 @@ class Model:
 
         :math:`\sqrt{F_{10}^2 + F_{20}^2}/F_{00}`; in the specular plane this is Eq. 203,
         :math:`\frac{R_s - R_p}{R_s + R_p}\,\frac{\Gamma}{\Gamma + D}`. Where the specular term
+        diverges at an exactly grazing direction (:meth:`diverges`; ``F`` holds 0 for it there) it is
+        the limit, the facet's DOLP (:func:`~scatterlab.pbrdf.dolp.facet_dolp`): the value just
+        above the horizon continues to it. Where the specular term
         vanishes (far from the lobe) it is 0 with a diffuse term; NaN where no light is reflected
         (:math:`F_{00} = 0`: ``eta = 1`` exactly, or ``diffuse="none"`` where the specular term
         vanishes or underflows, or both terms underflow far from the lobe of a smooth surface). This
@@ -296,17 +356,33 @@ class Model:
         ndarray in ``[0, 1]`` or NaN, broadcast shape.
         """
         F = self._evaluate(eta, theta_i, theta_r, phi, (3, 1))[..., 0]
-        return np.clip(stokes_dolp(F), 0.0, 1.0)  # NaN where F00 = 0
+        d = np.clip(stokes_dolp(F), 0.0, 1.0)  # NaN where F00 = 0
+        limit = self._divergent_points(eta, theta_i, theta_r, phi)
+        if limit is None:
+            return d
+        mask, *args = limit
+        fill = np.zeros(mask.shape)
+        fill[mask] = facet_dolp(*args)
+        return np.where(mask, fill, d)
 
     def aop(self, eta, theta_i, theta_r, phi) -> np.ndarray:
         """Angle of linear polarization [rad] in ``(-pi/2, pi/2]`` for unpolarized illumination.
 
         Measured from the macroscopic s axis of the observation direction. NaN where the
-        reflected light is unpolarized or absent (e.g. normal incidence and observation).
+        reflected light is unpolarized or absent (e.g. normal incidence and observation). Where the
+        specular term diverges at an exactly grazing direction (:meth:`diverges`) it is the limit,
+        the AOP of the light the facet reflects.
 
         Parameters and broadcasting as :meth:`dolp`.
         """
         F = self._evaluate(eta, theta_i, theta_r, phi, (3, 1))[..., 0]
+        limit = self._divergent_points(eta, theta_i, theta_r, phi)
+        if limit is not None:  # the facet's Stokes vector: the specular term dominates the limit
+            mask, e, ti, tr, ph = limit
+            geo = facet_geometry(ti, tr, ph, checked=True)
+            a, b, c, d, _ = facet_jones(e, geo)
+            F = F.copy()
+            F[mask] = mueller_from_jones_elements(a, b, c, d, shape=(3, 1))[..., 0]
         a = 0.5 * np.arctan2(F[..., 2], F[..., 1])
         a = np.where(a <= -np.pi / 2, a + np.pi, a)
         return np.where((F[..., 1] == 0) & (F[..., 2] == 0), np.nan, a)
@@ -317,8 +393,8 @@ class Model:
         The DOLP factorises into the facet's DOLP (:func:`~scatterlab.pbrdf.dolp.facet_dolp`), a
         function of eta and the facet geometry only, times this fraction, a function of roughness
         and geometry only. Inversion uses the split to differentiate each factor on its own. 1 where
-        both
-        terms vanish (the continuous pure-specular limit).
+        both terms vanish (the continuous pure-specular limit) and where the specular term diverges at
+        an exactly grazing direction (:meth:`diverges`; its limit).
 
         Parameters
         ----------
@@ -330,10 +406,12 @@ class Model:
         ndarray in ``[0, 1]``, the broadcast shape of the angles and ``sigma``.
         """
         _, ti, tr, ph = self._prepare(PEC, theta_i, theta_r, phi)
-        gamma = self._gamma(_geometry(ti, tr, ph))
+        geo = _geometry(ti, tr, ph)
+        gamma = self._gamma(geo)
         tot = gamma + self._diffuse_factor(ti, tr)
         with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(tot > 0, gamma / np.where(tot > 0, tot, 1.0), 1.0)
+            R = np.where(tot > 0, gamma / np.where(tot > 0, tot, 1.0), 1.0)
+        return np.where(self._diverges(geo, ti, tr), 1.0, R)
 
     def log_lobe_terms(self, theta_i, theta_r, phi=np.pi):
         r"""Logarithms of the specular term :math:`\Gamma` (Eq. 204) and the diffuse factor ``D``.

@@ -5,6 +5,8 @@ import numpy as np
 import pytest
 
 from scatterlab.inversion import fit_dolp, fit_dolp_per_pixel, model_dolp
+from scatterlab.inversion.forward import DolpForward
+from scatterlab.pbrdf import Model, facet_dolp
 
 # specular 30-60 deg (Ch. VII) plus an off-specular sweep at theta_i = 45 deg, which determines
 # sigma (Fig. 58)
@@ -139,3 +141,58 @@ def test_a_fit_pinned_on_a_bound_says_so():
         warnings.simplefilter("error", BoundWarning)
         glass = fit_dolp(model_dolp(1.5, 0.0, 0.3, th, th), th, th, sigma=0.3)
     assert not glass.at_bound.any()
+
+
+# -- model_dolp is finite where the pBRDF reflects no light or diverges: the limit, or DolpForward's --
+HALF_PI = np.pi / 2
+
+
+def _in_unit_interval(d):
+    return bool(np.all(np.isfinite(d)) and np.all((d >= 0) & (d <= 1)))
+
+
+@pytest.mark.parametrize("shadowing", ["torrance-sparrow", "smith", "none"])
+@pytest.mark.parametrize("diffuse", ["hyde", "none"])
+def test_model_dolp_at_exactly_90_deg_is_the_limit(shadowing, diffuse):
+    """Exactly 90 deg (both directions, or one without shadowing): NaN before (e.g. Torrance-Sparrow
+    without a diffuse term at theta_i = theta_r = 90 deg, where the lobe diverges and F holds 0). Now
+    finite, the values at 89.99 deg and 90 deg - 1e-9 rad continued, and equal to DolpForward."""
+    kw = dict(shadowing=shadowing, diffuse=diffuse)
+    ti = np.array([HALF_PI, HALF_PI, 1.0, 0.3])
+    tr = np.array([HALF_PI, 1.0, HALF_PI, 0.3])
+    for n, kappa in [(1.5, 0.0), (3.23, 4.35)]:
+        at = model_dolp(n, kappa, 0.3, ti, tr, **kw)
+        assert _in_unit_interval(at)
+        for near, tol in ((np.radians(89.99), 2e-3), (HALF_PI - 1e-9, 1e-7)):
+            ti_n, tr_n = np.where(ti == HALF_PI, near, ti), np.where(tr == HALF_PI, near, tr)
+            np.testing.assert_allclose(at, model_dolp(n, kappa, 0.3, ti_n, tr_n, **kw), atol=tol)
+        fwd = DolpForward(ti, tr, **kw)([n, kappa, 0.3])
+        np.testing.assert_allclose(at, fwd, atol=2e-5)
+
+
+def test_model_dolp_where_smith_shadowing_underflows_is_the_facet_dolp():
+    """Smith shadowing, sigma = 0.01, 0.1 rad to 1.4 rad: Gamma underflows and rho is 1 to rounding
+    (D = 0), so F = 0 and model_dolp was NaN. Now the formula of the fits (DolpForward): Gamma/(Gamma +
+    0) = 1, the facet's DOLP."""
+    ti, tr = np.array([0.1, 0.1]), np.array([1.4, 1.45])
+    for diffuse in ("hyde", "none"):
+        kw = dict(shadowing="smith", diffuse=diffuse)
+        assert np.all(np.isnan(Model(0.01, **kw).dolp(1.5, ti, tr)))  # the measurement: no light
+        d = model_dolp(1.5, 0.0, 0.01, ti, tr, **kw)
+        assert _in_unit_interval(d)
+        np.testing.assert_allclose(d, facet_dolp(1.5, ti, tr), rtol=1e-12)
+        np.testing.assert_allclose(d, DolpForward(ti, tr, **kw)([1.5, 0.0, 0.01]), rtol=1e-12)
+
+
+@pytest.mark.parametrize("phi", [np.pi, 2.0])
+def test_model_dolp_at_eta_one_is_the_limit(phi):
+    """eta = 1 (index-matched: no interface, nothing reflected, 0/0): NaN before. Now the limit eta -> 1
+    (DolpForward's value): the continuous extension of the facet's DOLP times the specular fraction."""
+    th = np.radians([10.0, 30.0, 50.0, 70.0, 89.99])
+    at = model_dolp(1.0, 0.0, 0.3, th, th, phi)
+    assert _in_unit_interval(at) and at.max() > 0.1
+    for n, kappa in [(1 + 1e-6, 0.0), (1.0, 1e-6)]:
+        np.testing.assert_allclose(at, model_dolp(n, kappa, 0.3, th, th, phi), atol=1e-5)
+    np.testing.assert_allclose(at, DolpForward(th, th, phi)([1.0, 0.0, 0.3]), atol=2e-5)
+    batch = model_dolp(np.array([1.0, 1.5]), 0.0, 0.3, th, th, phi)  # only the dark row changes
+    np.testing.assert_array_equal(batch, np.stack([at, model_dolp(1.5, 0.0, 0.3, th, th, phi)]))

@@ -58,6 +58,54 @@ def test_unshadowed_grazing_divergence_is_defined_as_zero():
     assert np.isfinite(m.mueller(ETA, 0.5, HALF_PI - 1e-7, np.pi)[0, 0])
 
 
+def test_unshadowed_grazing_dolp_is_the_limit():
+    """shadowing="none" at exactly 90 deg: F's specular term is 0 there (it diverges like 1/cos), and
+    the DOLP was NaN (no diffuse term, or rho > 1 clips it) or 0 (the diffuse term's) where its limit
+    is 0.627 (eta 1.5, 1 rad to 90 deg). It is the limit now, the facet's DOLP; AOP and specular
+    fraction too."""
+    for diffuse in ("hyde", "none"):
+        m = Model(0.3, shadowing="none", diffuse=diffuse)
+        for ti, tr, phi in [(1.0, HALF_PI, np.pi), (HALF_PI, 1.0, np.pi), (0.6, HALF_PI, 2.0)]:
+            ti_n, tr_n = min(ti, HALF_PI - 1e-9), min(tr, HALF_PI - 1e-9)
+            assert m.diverges(ti, tr, phi) and not m.diverges(ti_n, tr_n, phi)
+            assert m.mueller(ETA, ti, tr, phi)[0, 0] < 1  # the convention: no specular term
+            for eta in (1.5, ETA):
+                at = m.dolp(eta, ti, tr, phi)
+                assert np.isfinite(at) and at == pytest.approx(
+                    m.dolp(eta, ti_n, tr_n, phi), abs=1e-8
+                )
+                assert m.aop(eta, ti, tr, phi) == pytest.approx(
+                    m.aop(eta, ti_n, tr_n, phi), abs=1e-8
+                )
+            assert m.specular_fraction(ti, tr, phi) == 1.0
+        assert m.dolp(1.5, 1.0, HALF_PI, np.pi) == pytest.approx(0.62714, abs=1e-5)
+        # eta = 1: no interface, no light, NaN as everywhere (Model.dolp is the DOLP of the light)
+        assert np.isnan(m.dolp(1.0, 1.0, HALF_PI, np.pi))
+
+
+@pytest.mark.parametrize("shadowing", ["torrance-sparrow", "smith", "none"])
+@pytest.mark.parametrize("diffuse", ["hyde", "none"])
+def test_double_grazing_dolp_is_the_limit(shadowing, diffuse):
+    """theta_i = theta_r = 90 deg in the specular plane: F00 grows like 1/cos^2 towards it (4.4e23 at
+    90 deg - 1e-12 rad, Torrance-Sparrow) and is defined there as the diffuse term alone (2.5e-11 with
+    "hyde", 0 without): the grazing convention, kept. The DOLP, NaN without a diffuse term, is its
+    limit 0 (facet angle 90 deg: R_s = R_p)."""
+    m = Model(0.3, shadowing=shadowing, diffuse=diffuse)
+    assert m.diverges(HALF_PI, HALF_PI, np.pi)
+    assert not m.diverges([HALF_PI - 1e-9, 0.3], [HALF_PI - 1e-9, 0.4], np.pi).any()
+    F = m.mueller(ETA, HALF_PI, HALF_PI, np.pi)
+    assert np.all(np.isfinite(F)) and (diffuse == "hyde" or F[0, 0] == 0)
+    for eta in (1.5, ETA, PEC):
+        assert m.dolp(eta, HALF_PI, HALF_PI, np.pi) == 0
+        assert m.dolp(eta, HALF_PI - 1e-9, HALF_PI - 1e-9, np.pi) < 1e-7
+    assert m.specular_fraction(HALF_PI, HALF_PI) == 1.0
+    # in a batch: the same values, and no NaN
+    batch = m.dolp(1.5, [HALF_PI, 1.0, HALF_PI, 0.3], [HALF_PI, HALF_PI, 1.0, 0.4], np.pi)
+    assert np.all(np.isfinite(batch))
+    alone = [m.dolp(1.5, a, b) for a, b in [(HALF_PI, HALF_PI), (1.0, HALF_PI), (HALF_PI, 1.0)]]
+    np.testing.assert_array_equal(batch[:3], alone)
+
+
 # ---------------------------------------------------------------- the unshadowed DHR table
 def test_unshadowed_table_reproducer_and_energy():
     """The table for shadowing="none" was off by 3e-3 at small sigma (0.99692, quadrature: 1),
