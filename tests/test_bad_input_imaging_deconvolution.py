@@ -31,6 +31,25 @@ CASES = [
     (lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=10, read_noise=np.nan), "read_noise"),
     (lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=np.inf), "photons"),
     (lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=10, scale=-1), "scale"),
+    # photons = 1e30 was numpy's "lam value too large": its Poisson sampler draws means up to 9.2e18
+    (lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=1e30), r"photons .* in \(0, 1e\+18\]"),
+    (
+        lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=10, dark_current=1e19),
+        r"dark_current .* 1e\+18",
+    ),
+    (lambda: imaging.detect(np.ones((4, 4, 4)), 1, photons=1e17, scale=0.01), "scale .* too small"),
+    # NaN or negative T and weight gave NaN or a silently wrong update
+    (lambda: dolp_update(np.array([np.nan, 5.0]), np.array([1.0, 1.0])), "T must be finite"),
+    (lambda: dolp_update(np.array([-1.0, 5.0]), np.array([1.0, 1.0])), "T must be >= 0"),
+    (lambda: dolp_update(np.array([5.0]), np.array([np.nan])), "Q must be finite"),
+    (
+        lambda: dolp_update(np.array([5.0]), np.array([1.0]), PRIOR_SETS["ch5"][0], np.nan),
+        "weight must be finite",
+    ),
+    (
+        lambda: dolp_update(np.array([5.0]), np.array([1.0]), PRIOR_SETS["ch5"][0], -1.0),
+        "weight must be >= 0",
+    ),
     (lambda: blind_deconvolve(np.zeros((4, 16, 16)), A, iterations=2), "no photons"),
     (lambda: blind_deconvolve(-GOOD, A, iterations=2), "no photons"),
     (lambda: blind_deconvolve(GOOD, A, psf0=np.full((32, 32), np.nan), iterations=2), "psf0"),
@@ -73,6 +92,12 @@ CASES = [
 def test_bad_input_is_a_value_error_naming_the_problem(case, name):
     with pytest.raises(ValueError, match=name):
         case()
+
+
+def test_detect_at_its_largest_photon_count():
+    """photons = 1e18 (the largest allowed) with the largest dark current: drawn, finite."""
+    out = imaging.detect(np.ones((1, 2, 2)), 1, photons=1e18, dark_current=1e18)
+    assert np.all(np.isfinite(out)) and abs(out.mean() / 1e18 - 1) < 1e-6
 
 
 def test_negative_seed_is_named(capsys):

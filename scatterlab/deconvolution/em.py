@@ -70,6 +70,7 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 import scipy.fft as sfft
 
+from scatterlab._checks import as_positive
 from scatterlab.deconvolution.priors import dolp_update, map_objective
 from scatterlab.deconvolution.psf_update import PupilPhasePSF, gerchberg_saxton, resample_psf
 from scatterlab.polarization import dolp as stokes_dolp
@@ -765,11 +766,12 @@ def m_step(problem: _Problem, state: EMState, T, Qp, Pp):
     # S0 = T / sum_n w_n [(1 - P)/2 + P cos^2(alpha - theta_n)], w_n = h_n^T * 1_window the share of an
     # object pixel's light that reaches the measured window (Reeves; 1 for periodic boundaries)
     s0_new = T / model.s0_denominator(state.w, state.P)
-    P_new = dolp_update(T, Qp)
+    # T >= 0 up to FFT round-off (-1e-17 where no light falls): clipped for dolp_update, whose T = 0 is no light
+    P_new = dolp_update(np.maximum(T, 0.0), Qp)
     if priors:
         # the priors classify the measured pixels; the Reeves border (never observed) keeps the ML update
         Tw, Qw = ops.crop(T), ops.crop(Qp)
-        cands = np.stack([dolp_update(Tw, Qw, pr, weight) for pr in priors])
+        cands = np.stack([dolp_update(np.maximum(Tw, 0.0), Qw, pr, weight) for pr in priors])
         objs = np.stack(
             [map_objective(cands[k], Tw, Qw, pr, weight) for k, pr in enumerate(priors)]
         )
@@ -1098,28 +1100,45 @@ def _aop_mstep(B, th):
     return grid[k] + np.clip(shift, -0.5, 0.5) * np.radians(1.0)
 
 
+def _is_count(value, lo: int) -> bool:
+    """``value`` is an integer (not a bool) >= ``lo``."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool) and value >= lo
+
+
 def object_grid(data_shape, psf_radius=None, boundary: str = "reeves", pad=None) -> tuple:
     """Shape (Hp, Wp) of the object grid :func:`blind_deconvolve` uses for ``data_shape`` (H, W).
 
     Parameters
     ----------
     data_shape : tuple of int
-        Shape ``(H, W)`` of the data frames [pixels].
+        Shape ``(H, W)`` of the data frames [pixels], integers >= 1.
     psf_radius : float, optional
-        PSF support radius [pixels]; default ``min(H, W) / 4``.
+        PSF support radius [pixels], > 0; default ``min(H, W) / 4``.
     boundary : str
         ``"reeves"`` (padded object grid) or any other boundary (object grid = data grid).
     pad : int, optional
-        Padding on each side [pixels] for ``"reeves"``; default ``ceil(psf_radius)``.
+        Padding on each side [pixels] for ``"reeves"``, an integer >= 0; default ``ceil(psf_radius)``.
 
     Returns
     -------
     tuple of int
         ``(Hp, Wp)``: ``(H + 2 pad, W + 2 pad)`` for ``"reeves"``, else ``(H, W)``.
     """
-    H, W = data_shape
+    bad_shape = f"data_shape must be (H, W), two integers >= 1 [pixels], got {data_shape!r}"
+    try:
+        H, W = data_shape
+    except (TypeError, ValueError) as exc:
+        raise ValueError(bad_shape) from exc
+    if not (_is_count(H, 1) and _is_count(W, 1)):
+        raise ValueError(bad_shape)
+    if pad is not None and not _is_count(pad, 0):
+        raise ValueError(f"pad must be an integer >= 0 [pixels], got {pad!r}")
     if psf_radius is None:
         psf_radius = min(H, W) / 4
+    elif np.ndim(psf_radius) != 0:
+        raise ValueError(f"psf_radius must be a single float > 0 [pixels], got {psf_radius!r}")
+    else:
+        psf_radius = float(as_positive(psf_radius, "psf_radius"))
     if pad is None:
         pad = int(np.ceil(psf_radius)) if boundary == "reeves" else 0
     return (H + 2 * pad, W + 2 * pad) if boundary == "reeves" else (H, W)

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scatterlab._checks import as_finite, as_positive
+
 __all__ = [
     "SuperGaussianPrior",
     "PRIOR_SETS",
@@ -163,21 +165,23 @@ def dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1
     Parameters
     ----------
     T : array_like
-        Expected photon total of the pixel, sum over frames of psi_u + psi_p (counts, >= 0).
+        Expected photon total of the pixel, sum over frames of psi_u + psi_p (counts, finite, >= 0).
     Q : array_like
-        Expected polarized photon total, sum of psi_p (counts, clipped to >= 0); broadcasts with ``T``.
+        Expected polarized photon total, sum of psi_p (counts, finite, clipped to >= 0); broadcasts
+        with ``T``.
     prior : SuperGaussianPrior or None
         The DOLP prior (Eq. 195); None gives the ML update Q / T.
     weight : float
-        Weight w of the log prior in the objective (dimensionless, default 1).
+        Weight w of the log prior in the objective (dimensionless, finite, >= 0, default 1).
 
     Returns
     -------
     ndarray
         The updated DOLP, shape of ``broadcast(T, Q)``, in [0, 1].
     """
-    T = np.asarray(T, float)
-    Q = np.clip(np.asarray(Q, float), 0.0, None)
+    T = as_positive(T, "T", allow_zero=True)
+    Q = np.clip(as_finite(Q, "Q"), 0.0, None)
+    weight = float(as_positive(weight, "weight", allow_zero=True))
     T, Q = np.broadcast_arrays(T, Q)
     empty = T <= 0
     Ts = np.where(empty, 1.0, T)
@@ -342,6 +346,10 @@ def dolp_update_companion(T, Q, prior: SuperGaussianPrior, weight: float = 1.0) 
     return float(real[np.argmax(obj)])
 
 
+# the narrowest prior adaptive_priors returns, and the least spread of DOLP values it separates
+_MIN_SD = 0.01
+
+
 def adaptive_priors(dolp, base=PRIOR_SETS["ch5"], *, m: int = 10, mask=None):
     """Priors re-centred from the DOLP histogram (Sec. 8.1.1): two-means on the DOLP values, each prior centred
     on a cluster mean with a half-width of two cluster standard deviations (c2 = 1 / (2 std)), names kept
@@ -362,6 +370,15 @@ def adaptive_priors(dolp, base=PRIOR_SETS["ch5"], *, m: int = 10, mask=None):
     -------
     tuple of SuperGaussianPrior
         One prior per class, dielectric (higher DOLP) first.
+
+    Raises
+    ------
+    ValueError
+        Fewer than 10 finite DOLP values, or values with no contrast to separate classes: all within
+        0.01 of each other (the narrowest standard deviation of the priors it returns), e.g. a constant
+        image. Priors re-centred there would be indistinguishable (scipy's two-means left a cluster
+        empty and two identical priors came back); classify such an image with fixed priors
+        (:data:`PRIOR_SETS`) instead.
     """
     from scipy.cluster.vq import kmeans2
 
@@ -369,15 +386,23 @@ def adaptive_priors(dolp, base=PRIOR_SETS["ch5"], *, m: int = 10, mask=None):
     v = v[np.isfinite(v) & (mask if mask is not None else True)].ravel()
     if v.size < 10:
         raise ValueError("adaptive_priors needs at least 10 finite DOLP values")
-    cent, lab = kmeans2(
-        v[:, None], np.array([[np.quantile(v, 0.2)], [np.quantile(v, 0.8)]]), minit="matrix", seed=0
-    )
+    spread = float(np.ptp(v))
+    if spread < _MIN_SD:
+        raise ValueError(
+            f"dolp has no contrast to separate classes: its finite values span {spread:.3g}, less than "
+            f"{_MIN_SD} (the narrowest prior standard deviation); it must span at least {_MIN_SD}. "
+            f"Classify it with fixed priors (PRIOR_SETS) instead"
+        )
+    lo, hi = np.quantile(v, [0.2, 0.8])
+    if not hi > lo:  # most values equal: start from the extremes (equal starts empty a cluster)
+        lo, hi = v.min(), v.max()
+    cent, lab = kmeans2(v[:, None], np.array([[lo], [hi]]), minit="matrix", seed=0)
     out = []
     order = np.argsort(-cent[:, 0])  # dielectric first (higher DOLP), as in the base sets
     names = [p.name for p in base]
     for rank, k in enumerate(order[: len(base)]):
         sel = v[lab == k]
-        sd = max(float(sel.std()) if sel.size > 1 else 0.05, 0.01)
+        sd = max(float(sel.std()) if sel.size > 1 else 0.05, _MIN_SD)
         out.append(
             SuperGaussianPrior(
                 1 / (2 * sd),

@@ -25,7 +25,7 @@ def initial_psf(pupil, shape, d_over_r0: float = 10.0, rng=None) -> np.ndarray:
     Parameters
     ----------
     pupil : array_like, shape (n, n)
-        Pupil amplitude on a square grid (nonzero inside the aperture).
+        Pupil amplitude on a square grid (> 0 inside the aperture; at least one sample).
     shape : tuple of int
         Object grid shape ``(Hp, Wp)`` [pixels].
     d_over_r0 : float
@@ -45,6 +45,10 @@ def initial_psf(pupil, shape, d_over_r0: float = 10.0, rng=None) -> np.ndarray:
         raise ValueError(f"pupil must be a square 2-D array, got shape {A.shape}")
     if not d_over_r0 > 0:
         raise ValueError(f"d_over_r0 must be > 0, got {d_over_r0}")
+    if not np.any(A > 0):
+        raise ValueError(
+            "pupil must have at least one sample > 0 (the aperture); it is empty (all <= 0 or NaN)"
+        )
     n = A.shape[0]
     diameter = 2 * np.sqrt((A > 0).sum() / np.pi)  # pupil diameter [grid samples]
     phase = remove_piston_tilt(
@@ -138,12 +142,15 @@ def gerchberg_saxton(h_target, pupil, phase, shape, steps):
     ----------
     h_target : array (K, Hp, Wp) -- PSF estimates (centred); pupil : array (n, n) -- aperture amplitude A;
     phase : array (K, n, n) [rad] -- starting pupil phases; shape : (Hp, Wp) of the returned PSFs;
-    steps : int -- Gerchberg-Saxton iterations (the image plane is the 2n x 2n Nyquist grid of the pupil).
+    steps : int -- Gerchberg-Saxton iterations, >= 0 (0 returns the PSFs of the starting phases; the image
+    plane is the 2n x 2n Nyquist grid of the pupil).
 
     Returns
     -------
     psfs (K, Hp, Wp) unit sum, phases (K, n, n) [rad]
     """
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
+        raise ValueError(f"steps must be an integer >= 0, got {steps!r}")
     A = np.asarray(pupil, float)
     n = A.shape[-1]
     m = 2 * n

@@ -41,6 +41,9 @@ __all__ = [
 
 ANGLES_0_45_90_135 = np.radians([0.0, 45.0, 90.0, 135.0])
 ANGLES_0_60_120 = np.radians([0.0, 60.0, 120.0])
+# [e-] the largest mean signal and mean dark count of a pixel: numpy's Poisson sampler refuses means
+# above 9.2e18 (its int64 range), and the two means add
+_MAX_MEAN = 1e18
 
 
 def analyzer_matrix(angles) -> np.ndarray:
@@ -162,11 +165,16 @@ def detect(
     ----------
     channels : array ``(K, H, W)`` of non-negative intensities.
     photons : float
-        Expected photo-electrons for intensity ``scale`` (default: the largest channel intensity).
+        Expected photo-electrons for intensity ``scale`` (default: the largest channel intensity), in
+        ``(0, 1e18]``: the Poisson sampler draws means up to 9.2e18 e- only (its int64 range).
     read_noise : float
-        Gaussian read noise [e-] per read (the image and its dark frame are each read once).
+        Gaussian read noise [e-] per read (the image and its dark frame are each read once), ``>= 0``.
     dark_current : float
-        Mean dark electrons per pixel; a dark frame with the same statistics is subtracted.
+        Mean dark electrons per pixel, in ``[0, 1e18]``; a dark frame with the same statistics is
+        subtracted.
+    scale : float, optional
+        The intensity that gives ``photons`` (> 0); the brightest pixel's mean,
+        ``photons * max(channels) / scale``, must not exceed 1e18 e- either.
 
     Returns
     -------
@@ -176,16 +184,25 @@ def detect(
     I = as_finite(channels, "channels")
     if np.any(I < 0):
         raise ValueError("channels must be non-negative intensities")
-    for name, v, lo in (
-        ("photons", photons, "> 0"),
-        ("read_noise", read_noise, ">= 0"),
-        ("dark_current", dark_current, ">= 0"),
-    ):
-        if not (np.isfinite(v) and (v > 0 if lo == "> 0" else v >= 0)):
-            raise ValueError(f"{name} must be finite and {lo} [e-], got {v!r}")
+    limit = "the Poisson sampler draws means up to 9.2e18 e- only"
+    if not (np.isfinite(photons) and 0 < photons <= _MAX_MEAN):
+        raise ValueError(
+            f"photons must be finite and in (0, {_MAX_MEAN:g}] [e-] ({limit}), got {photons!r}"
+        )
+    if not (np.isfinite(read_noise) and read_noise >= 0):
+        raise ValueError(f"read_noise must be finite and >= 0 [e-], got {read_noise!r}")
+    if not (np.isfinite(dark_current) and 0 <= dark_current <= _MAX_MEAN):
+        raise ValueError(
+            f"dark_current must be finite and in [0, {_MAX_MEAN:g}] [e-] ({limit}), got {dark_current!r}"
+        )
     if scale is not None and not (np.isfinite(scale) and scale > 0):
         raise ValueError(
             f"scale (the intensity that gives `photons`) must be finite and > 0, got {scale!r}"
+        )
+    if scale is not None and float(photons) * (float(I.max()) / float(scale)) > _MAX_MEAN:
+        raise ValueError(
+            f"scale ({scale!r}) is too small for photons ({photons!r}): the brightest pixel's mean, "
+            f"photons * max(channels) / scale, must be <= {_MAX_MEAN:g} e- ({limit})"
         )
     rng = np.random.default_rng(rng)
     scale = float(I.max()) if scale is None else float(scale)

@@ -42,7 +42,8 @@ def circular_pupil(n: int, radius: float, obscuration: float = 0.0) -> np.ndarra
     n : int
         Grid size [pixels], >= 4.
     radius : float
-        Pupil radius [pixels], <= ``n / 2``.
+        Pupil radius [pixels], <= ``n / 2``; with ``obscuration``, it must leave at least one pixel
+        centre inside the pupil.
     obscuration : float
         Central obscuration radius as a fraction of ``radius``, in [0, 1).
 
@@ -60,7 +61,15 @@ def circular_pupil(n: int, radius: float, obscuration: float = 0.0) -> np.ndarra
         raise ValueError("obscuration must be in [0, 1)")
     y, x = np.mgrid[0:n, 0:n] - (n - 1) / 2
     r = np.hypot(x, y)
-    return ((r <= radius) & (r >= obscuration * radius)).astype(float)
+    inside = (r <= radius) & (r >= obscuration * radius)
+    if not inside.any():
+        nearest = f" (the nearest lies {r.min():.3g} px from it)" if r.min() > radius else ""
+        raise ValueError(
+            f"radius ({radius:g} px) and obscuration ({obscuration:g}) leave the pupil empty: no pixel "
+            f"centre of the {n} x {n} grid lies {obscuration * radius:g} to {radius:g} px from its "
+            f"centre{nearest}; increase radius or decrease obscuration"
+        )
+    return inside.astype(float)
 
 
 def psf(pupil, phase=None, pad: int = 2) -> np.ndarray:

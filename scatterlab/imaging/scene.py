@@ -79,7 +79,7 @@ def painted_plate(
     theta : float
         Specular angle [rad].
     scratches : int
-        Number of random straight scratches (about 1 pixel wide).
+        Number of random straight scratches (about 1 pixel wide), >= 0.
     zoom : float
         Magnification of the letter template: 1 shows the whole "st" (letter strokes n/13 wide); 2 shows a
         field half as wide, e.g. the right side of the "s" and the left side of the "t" as in Figs. 49-52.
@@ -98,6 +98,8 @@ def painted_plate(
         raise ValueError(f"n must be an integer >= 8 pixels, got {n!r}")
     if not (np.isfinite(zoom) and 0.25 <= zoom <= 16):
         raise ValueError(f"zoom must be in [0.25, 16], got {zoom!r}")
+    if isinstance(scratches, bool) or not isinstance(scratches, (int, np.integer)) or scratches < 0:
+        raise ValueError(f"scratches must be an integer >= 0, got {scratches!r}")
     rng = np.random.default_rng(rng)
     u = n * zoom / 16  # pixels per template unit
     yy, xx = np.mgrid[0:n, 0:n]

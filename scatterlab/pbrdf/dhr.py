@@ -177,10 +177,10 @@ def dhr_beckmann(
     return rho.reshape(np.shape(theta_i))
 
 
-def _nodes(n, name: str) -> int:
-    """A quadrature order: an integer >= 1."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"{name} must be an integer >= 1, got {n!r}")
+def _nodes(n, name: str, lo: int = 1) -> int:
+    """A quadrature order or grid size: an integer >= ``lo``."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < lo:
+        raise ValueError(f"{name} must be an integer >= {lo}, got {n!r}")
     return int(n)
 
 
@@ -303,7 +303,8 @@ class DHRTable:
     ----------
     shadowing : {"torrance-sparrow", "none", "smith"} or Shadowing
     n_theta, n_sigma : int
-        Grid sizes per piece in the angle variable and in ``ln(sigma)``.
+        Grid sizes per piece in the angle variable and in ``ln(sigma)``, each >= 4 (the bicubic
+        spline's minimum).
     sigma_range : (float, float)
         Tabulated roughness range; outside it :meth:`__call__` falls back to quadrature.
 
@@ -330,7 +331,9 @@ class DHRTable:
         self.strategy = shadowing_strategy(shadowing)
         self.shadowing = self.strategy.name
         self.sigma_range = (float(sigma_range[0]), float(sigma_range[1]))
-        self.n_theta, self.n_sigma = n_theta, n_sigma
+        self.n_theta = _nodes(n_theta, "n_theta", 4)  # a cubic spline needs 4 nodes per axis
+        self.n_sigma = _nodes(n_sigma, "n_sigma", 4)
+        n_theta, n_sigma = self.n_theta, self.n_sigma
         version = 4 if self.strategy.conserves_energy else 5  # 5: the weight 1 + sigma tan
         key = f"{version}-{self.shadowing}-{n_theta}-{n_sigma}-{self.sigma_range}"
         name = f"dhr-{hashlib.sha1(key.encode()).hexdigest()[:12]}.npz"

@@ -233,6 +233,27 @@ def test_adaptive_priors_recentre_on_the_histogram():
     assert die.name == "dielectric" and met.name == "metal"
 
 
+def test_adaptive_priors_refuse_a_dolp_image_without_contrast():
+    """A constant DOLP image made scipy's two-means warn "One of the clusters is empty" and returned two
+    identical priors (a near-constant one, two priors 1e-9 apart): nothing separates two classes there.
+    A ValueError says so (and names dolp); a mostly constant image with a few other pixels still splits,
+    without the warning."""
+    import warnings
+
+    rng = np.random.default_rng(1)
+    for flat in (
+        np.full((16, 16), 0.3),
+        0.3 + 1e-9 * rng.standard_normal(256),
+        0.3 + 1e-3 * rng.standard_normal(256),
+    ):
+        with pytest.raises(ValueError, match="dolp has no contrast to separate classes"):
+            adaptive_priors(flat)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        die, met = adaptive_priors(np.r_[np.full(90, 0.3), np.full(10, 0.5)])
+    assert die.c3 == pytest.approx(0.5) and met.c3 == pytest.approx(0.3)
+
+
 def test_angles_and_bad_input():
     assert evenly_spaced(ANGLES_0_45_90_135) and evenly_spaced(np.radians([0, 60, 120]))
     assert not evenly_spaced(np.radians([0, 45, 90]))
@@ -277,6 +298,36 @@ def test_prior_thresholds_and_initial_psf():
     assert spread(h0) > 2 * spread(resample_psf(psf(pupil, pad=2), shape))
     with pytest.raises(ValueError, match="d_over_r0"):
         initial_psf(pupil, shape, d_over_r0=0)
+    # an empty pupil was refused as "r0 must be > 0" (the screen's r0 follows from the pupil's diameter)
+    for empty in (np.zeros((32, 32)), -pupil, np.full((32, 32), np.nan)):
+        with pytest.raises(ValueError, match="pupil must have at least one sample > 0"):
+            initial_psf(empty, shape)
+
+
+def test_object_grid_and_gerchberg_saxton_refuse_bad_sizes():
+    """object_grid((-4, 32)) returned (-4 + 2 pad, 32 + 2 pad); gerchberg_saxton(steps=-1) ran no step,
+    silently. Each is a ValueError naming the argument and its range."""
+    from scatterlab.deconvolution import gerchberg_saxton, object_grid
+
+    for bad in ((-4, 32), (0, 32), (32.0, 32), (32,), 32, (32, 32, 3)):
+        with pytest.raises(ValueError, match="data_shape must be .* integers >= 1"):
+            object_grid(bad)
+    for bad in (-1, 0, np.nan, np.inf):
+        with pytest.raises(ValueError, match="psf_radius must be"):
+            object_grid((32, 32), bad)
+    for bad in (-1, 2.5):
+        with pytest.raises(ValueError, match="pad must be an integer >= 0"):
+            object_grid((32, 32), pad=bad)
+    assert object_grid((32, 48), 4) == (40, 56) and object_grid((32, 48), pad=0) == (32, 48)
+    assert object_grid((np.int64(32), 48), 4, boundary="periodic") == (32, 48)
+    A = np.ones((4, 4))
+    h = np.full((1, 8, 8), 1 / 64)
+    for bad in (-1, 2.5, True):
+        with pytest.raises(ValueError, match="steps must be an integer >= 0"):
+            gerchberg_saxton(h, A, np.zeros((1, 4, 4)), (8, 8), bad)
+    # 0 steps: the PSFs of the starting phases
+    psfs, phases = gerchberg_saxton(h, A, np.zeros((1, 4, 4)), (8, 8), 0)
+    assert np.isclose(psfs.sum(), 1) and np.all(phases == 0)
 
 
 def test_saturated_pixels_are_masked_out_of_the_likelihood():

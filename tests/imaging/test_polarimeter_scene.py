@@ -105,6 +105,10 @@ def test_bad_input(rng):
         from scatterlab.imaging import Scene
 
         Scene(np.full((4, 4), 3), [1.5], [0.3], 0.5, 0.5)
+    for bad in (-1, 2.5, True):  # -1 drew no scratch, silently
+        with pytest.raises(ValueError, match="scratches must be an integer >= 0"):
+            painted_plate(32, scratches=bad)
+    assert painted_plate(32, scratches=0).labels.max() <= 1
 
 
 def test_axis_first_stokes_images_are_refused_with_the_expected_shape(rng):

@@ -57,6 +57,13 @@ def test_r0_fitted_from_simulated_long_exposure_mtf_within_5_percent(d_over_r0):
 def test_bad_input():
     with pytest.raises(ValueError, match="radius"):
         circular_pupil(32, 20)
+    # a pupil with no pixel was returned silently (all zeros): name the arguments that emptied it
+    with pytest.raises(
+        ValueError, match=r"radius \(0.1 px\) and obscuration \(0\) leave the pupil empty"
+    ):
+        circular_pupil(8, 0.1)
+    with pytest.raises(ValueError, match="radius .* and obscuration .* leave the pupil empty"):
+        circular_pupil(8, 2.0, 0.95)
     with pytest.raises(ValueError, match="pad"):
         psf(circular_pupil(32, 10), pad=1)
     with pytest.raises(ValueError, match="phase"):

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from scatterlab.pbrdf import dhr_beckmann, dhr_sphere_unshadowed, dhr_table
+from scatterlab.pbrdf import DHRTable, dhr_beckmann, dhr_sphere_unshadowed, dhr_table
 
 
 def test_table_error_against_quadrature_at_random_points():
@@ -76,3 +76,20 @@ def test_general_slope_quadrature_against_beckmann_specific_quadrature():
         np.testing.assert_allclose(
             dhr_slope_quadrature(th, Beckmann(sigma)), dhr_beckmann(th, sigma), atol=2e-5
         )
+
+
+@pytest.mark.parametrize(
+    "kw, name",
+    [
+        ({"n_theta": 0}, "n_theta"),
+        ({"n_theta": 3}, "n_theta"),
+        ({"n_sigma": 0}, "n_sigma"),
+        ({"n_theta": 8.5}, "n_theta"),
+        ({"n_sigma": True}, "n_sigma"),
+    ],
+)
+def test_table_grid_sizes_are_checked(kw, name):
+    """DHRTable(n_theta=0) failed with an IndexError deep in the build (n_sigma=0 in the spline): a
+    bicubic table needs 4 nodes per axis."""
+    with pytest.raises(ValueError, match=rf"{name} must be an integer >= 4"):
+        DHRTable(cache=False, **kw)
