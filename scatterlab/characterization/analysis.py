@@ -354,7 +354,14 @@ def _layout(images, thetas, settings) -> np.ndarray:
         warnings.simplefilter("ignore", RuntimeWarning)
         mean = np.nanmean(np.stack([im.dolp for im in images]), axis=0)
     known = np.isfinite(mean)
-    cls = classify_dolp(np.where(known, mean, 0.0), adaptive_priors(mean[known], priors))
+    try:
+        adapted = adaptive_priors(mean[known], priors)
+    except ValueError as exc:  # one material, or too few measured pixels: nothing to re-centre on
+        raise ValueError(
+            f"classes='adaptive' cannot re-centre the priors on this dataset's restored DOLP ({exc}); "
+            "classify with the fixed priors: analyze --classes priors (AnalyzeSettings(classes='priors'))"
+        ) from exc
+    cls = classify_dolp(np.where(known, mean, 0.0), adapted)
     return np.where(known, np.asarray(cls) > 0, -1).astype(int)
 
 

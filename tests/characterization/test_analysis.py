@@ -300,3 +300,17 @@ def test_maps_figure_shows_the_truth_beside_the_estimates():
     assert "true regions" in titles[0] and "n (truth: paint 1.39, metal 1.44)" in titles[0]
     assert "kappa (truth: paint 0.34, metal 16.00)" in titles[0]
     assert "true regions" not in titles[1] and "n" in titles[1] and "kappa" in titles[1]
+
+
+def test_adaptive_classes_on_a_dolp_without_contrast_say_what_to_do():
+    # one material (a constant DOLP): the adaptive classes have nothing to re-centre on, and the error
+    # names the option that classifies such a dataset
+    from types import SimpleNamespace
+
+    from scatterlab.characterization.analysis import _layout
+
+    images = [SimpleNamespace(dolp=np.full((16, 16), 0.42), classes=None) for _ in range(2)]
+    with pytest.raises(ValueError, match="--classes priors"):
+        _layout(images, np.radians([40.0, 55.0]), AnalyzeSettings())
+    fixed = _layout(images, np.radians([40.0, 55.0]), AnalyzeSettings(classes="priors"))
+    assert fixed.shape == (16, 16) and set(np.unique(fixed)) <= {0, 1}
