@@ -141,6 +141,29 @@ def as_positive(value, name: str, *, allow_zero: bool = False) -> np.ndarray:
     return arr
 
 
+def as_count(value, name: str, lo: int = 0, unit: str = "") -> int:
+    """``value`` as an int, checked to be an integer (not a bool) >= ``lo``.
+
+    Parameters
+    ----------
+    value : int
+        A count: iterations, grid points, pixels.
+    name : str
+        The argument's name in the message.
+    lo : int
+        The smallest allowed value.
+    unit : str
+        Appended to the range in the message, e.g. ``" [pixels]"``.
+
+    Returns
+    -------
+    int
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
+        raise ValueError(f"{name} must be an integer >= {lo}{unit}, got {value!r}")
+    return int(value)
+
+
 def broadcast(**arrays) -> list[np.ndarray]:
     """Broadcast named arrays together; a shape mismatch names the arguments.
 

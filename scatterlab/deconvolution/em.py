@@ -70,8 +70,8 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 import scipy.fft as sfft
 
-from scatterlab._checks import as_positive
-from scatterlab.deconvolution.priors import dolp_update, map_objective
+from scatterlab._checks import as_count, as_positive
+from scatterlab.deconvolution.priors import _dolp_update, map_objective
 from scatterlab.deconvolution.psf_update import PupilPhasePSF, gerchberg_saxton, resample_psf
 from scatterlab.polarization import dolp as stokes_dolp
 from scatterlab.polarization import signed_dolp
@@ -558,8 +558,7 @@ def _check_start_and_stop(opts: EMOptions) -> None:
     if aop is not None and not np.all(np.isfinite(np.asarray(aop, float))):
         raise ValueError("aop must be finite [rad]")
     its = opts.stop.iterations
-    if isinstance(its, bool) or not isinstance(its, (int, np.integer)) or its < 0:
-        raise ValueError(f"iterations must be an integer >= 0, got {its!r}")
+    as_count(its, "iterations", 0)
     tol = opts.stop.tol
     if tol is not None and not (np.ndim(tol) == 0 and np.isfinite(tol) and tol >= 0):
         raise ValueError(f"tol must be None or a single finite float >= 0, got {tol!r}")
@@ -766,12 +765,11 @@ def m_step(problem: _Problem, state: EMState, T, Qp, Pp):
     # S0 = T / sum_n w_n [(1 - P)/2 + P cos^2(alpha - theta_n)], w_n = h_n^T * 1_window the share of an
     # object pixel's light that reaches the measured window (Reeves; 1 for periodic boundaries)
     s0_new = T / model.s0_denominator(state.w, state.P)
-    # T >= 0 up to FFT round-off (-1e-17 where no light falls): clipped for dolp_update, whose T = 0 is no light
-    P_new = dolp_update(np.maximum(T, 0.0), Qp)
+    P_new = _dolp_update(T, Qp)  # unchecked: T >= 0 up to FFT round-off, which it reads as no light
     if priors:
         # the priors classify the measured pixels; the Reeves border (never observed) keeps the ML update
         Tw, Qw = ops.crop(T), ops.crop(Qp)
-        cands = np.stack([dolp_update(np.maximum(Tw, 0.0), Qw, pr, weight) for pr in priors])
+        cands = np.stack([_dolp_update(Tw, Qw, pr, weight) for pr in priors])
         objs = np.stack(
             [map_objective(cands[k], Tw, Qw, pr, weight) for k, pr in enumerate(priors)]
         )
@@ -1100,11 +1098,6 @@ def _aop_mstep(B, th):
     return grid[k] + np.clip(shift, -0.5, 0.5) * np.radians(1.0)
 
 
-def _is_count(value, lo: int) -> bool:
-    """``value`` is an integer (not a bool) >= ``lo``."""
-    return isinstance(value, (int, np.integer)) and not isinstance(value, bool) and value >= lo
-
-
 def object_grid(data_shape, psf_radius=None, boundary: str = "reeves", pad=None) -> tuple:
     """Shape (Hp, Wp) of the object grid :func:`blind_deconvolve` uses for ``data_shape`` (H, W).
 
@@ -1127,12 +1120,11 @@ def object_grid(data_shape, psf_radius=None, boundary: str = "reeves", pad=None)
     bad_shape = f"data_shape must be (H, W), two integers >= 1 [pixels], got {data_shape!r}"
     try:
         H, W = data_shape
+        H, W = as_count(H, "H", 1), as_count(W, "W", 1)
     except (TypeError, ValueError) as exc:
         raise ValueError(bad_shape) from exc
-    if not (_is_count(H, 1) and _is_count(W, 1)):
-        raise ValueError(bad_shape)
-    if pad is not None and not _is_count(pad, 0):
-        raise ValueError(f"pad must be an integer >= 0 [pixels], got {pad!r}")
+    if pad is not None:
+        pad = as_count(pad, "pad", 0, " [pixels]")
     if psf_radius is None:
         psf_radius = min(H, W) / 4
     elif np.ndim(psf_radius) != 0:

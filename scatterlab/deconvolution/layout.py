@@ -57,6 +57,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scatterlab._checks import as_count
+
 __all__ = ["LayoutResult", "edge_band_mask", "layout_psf"]
 
 
@@ -200,8 +202,7 @@ def _pin(z, band):
 
 
 def _check_count(name, value, lo):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise ValueError(f"{name} must be an integer >= {lo}, got {value!r}")
+    as_count(value, name, lo)
 
 
 def layout_psf(

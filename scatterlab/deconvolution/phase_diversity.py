@@ -28,6 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from scatterlab._checks import as_count
+
 __all__ = ["defocus_phase", "phase_diversity", "PhaseDiversityResult"]
 
 # L-BFGS-B's memory (corrections kept). Its own work per iteration grows with it and, with 10^5 variables,
@@ -175,8 +177,7 @@ def _check(frames, diversity, pupil, gains, read_noise, pad, smoothing, iteratio
     n = A.shape[0]
     if pad is None:
         pad = max(n, max(d.shape[1], d.shape[2]) // 2)
-    if isinstance(pad, bool) or not isinstance(pad, (int, np.integer)) or pad < 0:
-        raise ValueError(f"pad must be an integer >= 0 [pixels], got {pad!r}")
+    as_count(pad, "pad", 0, " [pixels]")
     if 2 * n > min(d.shape[1], d.shape[2]) + 2 * pad:
         raise ValueError(
             f"pad = {pad} is too small for the pupil's {2 * n} x {2 * n} PSF: the padded field "

@@ -180,8 +180,16 @@ def dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1
         The updated DOLP, shape of ``broadcast(T, Q)``, in [0, 1].
     """
     T = as_positive(T, "T", allow_zero=True)
-    Q = np.clip(as_finite(Q, "Q"), 0.0, None)
+    Q = as_finite(Q, "Q")
     weight = float(as_positive(weight, "weight", allow_zero=True))
+    return _dolp_update(T, Q, prior, weight)
+
+
+def _dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1.0) -> np.ndarray:
+    """:func:`dolp_update` without the argument checks, for the EM's M-step: ``T <= 0`` (also the FFT
+    round-off of -1e-17 where no light falls) is no light, ``Q`` is clipped at 0."""
+    T = np.asarray(T, float)
+    Q = np.clip(np.asarray(Q, float), 0.0, None)
     T, Q = np.broadcast_arrays(T, Q)
     empty = T <= 0
     Ts = np.where(empty, 1.0, T)

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from scatterlab._checks import as_count
+
 __all__ = ["initial_psf", "gerchberg_saxton", "psf_distance", "resample_psf"]
 
 
@@ -120,8 +122,7 @@ def psf_distance(h, truth, reach: int = 8) -> tuple:
     for name, a in (("h", h), ("truth", truth)):
         if a.ndim != 2 or not np.all(np.isfinite(a)) or np.any(a < 0) or not a.sum() > 0:
             raise ValueError(f"{name} must be a finite non-negative 2-D PSF with a positive sum")
-    if isinstance(reach, bool) or not isinstance(reach, (int, np.integer)) or reach < 0:
-        raise ValueError(f"reach must be an integer >= 0, got {reach!r}")
+    as_count(reach, "reach", 0)
     truth = truth / truth.sum()
     try:
         h = resample_psf(h, truth.shape)
@@ -149,8 +150,7 @@ def gerchberg_saxton(h_target, pupil, phase, shape, steps):
     -------
     psfs (K, Hp, Wp) unit sum, phases (K, n, n) [rad]
     """
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
-        raise ValueError(f"steps must be an integer >= 0, got {steps!r}")
+    as_count(steps, "steps", 0)
     A = np.asarray(pupil, float)
     n = A.shape[-1]
     m = 2 * n

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from scatterlab._checks import as_count
 from scatterlab.pbrdf import Model
 
 __all__ = ["Scene", "painted_plate", "render_stokes"]
@@ -98,8 +99,7 @@ def painted_plate(
         raise ValueError(f"n must be an integer >= 8 pixels, got {n!r}")
     if not (np.isfinite(zoom) and 0.25 <= zoom <= 16):
         raise ValueError(f"zoom must be in [0.25, 16], got {zoom!r}")
-    if isinstance(scratches, bool) or not isinstance(scratches, (int, np.integer)) or scratches < 0:
-        raise ValueError(f"scratches must be an integer >= 0, got {scratches!r}")
+    as_count(scratches, "scratches", 0)
     rng = np.random.default_rng(rng)
     u = n * zoom / 16  # pixels per template unit
     yy, xx = np.mgrid[0:n, 0:n]

@@ -111,8 +111,9 @@ class DolpForward:
             )
         ti, tr, ph = self.theta_i, self.theta_r, self.phi
         # where the lobe diverges at exact grazing (log Gamma = -inf there) the fraction is its limit, 1
-        self._diverges = Model(1.0, **self.model_kw).diverges(ti, tr, ph)
-        lg1, _ = Model(1.0, **self.model_kw).log_lobe_terms(ti, tr, ph)
+        unit = Model(1.0, **self.model_kw)
+        self._diverges = unit.diverges(ti, tr, ph)
+        lg1, _ = unit.log_lobe_terms(ti, tr, ph)
         t2 = facet_geometry(ti, tr, ph, checked=True).tan2_alpha
         self._t2 = np.where(np.isfinite(t2), t2, 0.0)
         self._log_gop = lg1 + self._t2 / 2 + np.log(2 * np.pi)  # -inf where facets are hidden

@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import linalg
 
+from scatterlab._checks import as_count
+
 __all__ = ["forward_backward"]
 
 
@@ -47,10 +49,8 @@ def forward_backward(A, V, *, tol: float = 1e-6, max_iter: int = 50, block: int 
     ValueError
         ``block`` not an integer >= 1, ``max_iter`` not an integer >= 1, ``tol`` not finite and > 0.
     """
-    if isinstance(block, bool) or not isinstance(block, (int, np.integer)) or block < 1:
-        raise ValueError(f"block must be an integer >= 1 (rows per diagonal block), got {block!r}")
-    if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
-        raise ValueError(f"max_iter must be an integer >= 1, got {max_iter!r}")
+    as_count(block, "block", 1, " (rows per diagonal block)")
+    as_count(max_iter, "max_iter", 1)
     if not (np.isfinite(tol) and tol > 0):
         raise ValueError(f"tol must be finite and > 0 (relative change of U), got {tol!r}")
     N = A.shape[0]

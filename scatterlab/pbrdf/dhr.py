@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 from scipy import interpolate, special
 
-from scatterlab._checks import as_angle, as_positive
+from scatterlab._checks import as_angle, as_count, as_positive
 from scatterlab.pbrdf.shadowing import SHADOWING, shadowing_strategy
 
 __all__ = [
@@ -179,9 +179,7 @@ def dhr_beckmann(
 
 def _nodes(n, name: str, lo: int = 1) -> int:
     """A quadrature order or grid size: an integer >= ``lo``."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < lo:
-        raise ValueError(f"{name} must be an integer >= {lo}, got {n!r}")
-    return int(n)
+    return as_count(n, name, lo)
 
 
 def _outer_nodes(c, s, sigma, K, strategy, n_outer):
