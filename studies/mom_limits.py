@@ -39,9 +39,8 @@ def run(ctx):
             name = f"{pol}_{'pec' if eta is None else 'glass'}"
             spm[name] = {
                 "realizations": count,
-                "total_ratio_to_spm1_periodogram": float(
-                    np.trapezoid(incoh, th) / np.trapezoid(ref, th)
-                ),
+                "total_ratio_to_spm1_periodogram": out["ratio"],
+                "total_ratio_jackknife_se": out["ratio_se"],
                 "total_ratio_to_spm1_ensemble": float(
                     np.trapezoid(incoh, th) / np.trapezoid(ens, th)
                 ),
@@ -69,8 +68,14 @@ def run(ctx):
     ratios = {k: v["total_ratio_to_spm1_periodogram"] for k, v in spm.items()}
     ctx.say(
         "Small roughness (k sigma_h = 0.1): the incoherent power the MoM scatters is "
-        + ", ".join(f"{v:.3f}" for v in ratios.values())
-        + f" times SPM1's ({', '.join(ratios)}; SPM1 on the realizations' own periodograms), and "
+        + ", ".join(
+            f"{v['total_ratio_to_spm1_periodogram']:.3f} +- {v['total_ratio_jackknife_se']:.3f}"
+            for v in spm.values()
+        )
+        + f" times SPM1's ({', '.join(ratios)}; SPM1 on the realizations' own periodograms; +- the "
+        "jackknife standard error over the realizations, "
+        + ", ".join(f"{v['realizations']}" for v in spm.values())
+        + " of them), and "
         + ", ".join(f"{v['total_ratio_to_spm1_ensemble']:.2f}" for v in spm.values())
         + " times the ensemble SPM1 (Monte-Carlo scatter of the few realizations). "
         f"Large PEC cylinders approach physical optics in the reflection zone: relative L2 "
@@ -85,7 +90,10 @@ def run(ctx):
         ctx,
         "own study",
         "MoM / SPM1 incoherent power "
-        + ", ".join(f"{k} {v:.3f}" for k, v in ratios.items())
+        + ", ".join(
+            f"{k} {v['total_ratio_to_spm1_periodogram']:.3f} +- {v['total_ratio_jackknife_se']:.3f}"
+            for k, v in spm.items()
+        )
         + f"; PEC cylinder vs physical optics at ka {kas[-1]}: relative L2 {po['s'][-1]['l2_vs_po']:.3f} (s), "
         f"{po['p'][-1]['l2_vs_po']:.3f} (p)",
     )

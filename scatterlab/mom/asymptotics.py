@@ -189,7 +189,10 @@ def compare_spm1(polarization, eta, count, length, rng, k_sigma=0.1, corr_length
     -------
     dict -- theta_s (S,) [rad]; mom, spm1 (the realizations' periodograms through the same
     incoherent estimator), spm1_ensemble (Gaussian W, times the estimator's 1 - 1/count), all
-    (S,) [1/rad].
+    (S,) [1/rad]; ratio, the incoherent power of ``mom`` over that of ``spm1`` (integrated over
+    theta_s), and ratio_se, its delete-one jackknife standard error over the realizations (the
+    Monte-Carlo scatter the control variate leaves: with 8 realizations of 20 wavelengths the
+    p-polarized PEC ratio varies by about 0.06 from seed to seed).
     """
     from scatterlab.mom.formulations import solve
     from scatterlab.mom.incidence import TaperedWave
@@ -207,20 +210,32 @@ def compare_spm1(polarization, eta, count, length, rng, k_sigma=0.1, corr_length
         F.append(solve(x, y, 1.0, inc, polarization=polarization, eta=eta).far_field(th))
         A.append(periodogram(x, y, inc, k, th))
     F, A = np.array(F), np.array(A)
-    mom = (np.mean(np.abs(F) ** 2, 0) - np.abs(np.mean(F, 0)) ** 2) / (
-        8 * np.pi * k * inc.incident_power(k)
-    )
-    W = np.mean(np.abs(A) ** 2, 0) - np.abs(np.mean(A, 0)) ** 2
+    norm = 8 * np.pi * k * inc.incident_power(k)
+    q = k * (np.sin(th) - np.sin(ti))
 
-    def spectrum(q):
-        return np.interp(q, k * (np.sin(th) - np.sin(ti)), W)
+    def incoherent(X):  # (N, S) -> (S,): mean power less the coherent part's
+        return np.mean(np.abs(X) ** 2, 0) - np.abs(np.mean(X, 0)) ** 2
 
+    def spm1_of(W):
+        return spm1_coefficient(ti, th, k, lambda qq: np.interp(qq, q, W), polarization, eta)
+
+    def ratio(idx):
+        return np.trapezoid(incoherent(F[idx]) / norm, th) / np.trapezoid(
+            spm1_of(incoherent(A[idx])), th
+        )
+
+    mom, spm1 = incoherent(F) / norm, spm1_of(incoherent(A))
+    # delete-one jackknife of the integrated ratio (both sides lose the same realization)
+    loo = np.array([ratio(np.delete(np.arange(count), i)) for i in range(count)])
+    se = float(np.sqrt((count - 1) / count * np.sum((loo - loo.mean()) ** 2)))
     return {
         "theta_s": th,
         "mom": mom,
-        "spm1": spm1_coefficient(ti, th, k, spectrum, polarization, eta),
+        "spm1": spm1,
         "spm1_ensemble": spm1_coefficient(ti, th, k, (sigma_h, corr_length), polarization, eta)
         * (1 - 1 / count),
+        "ratio": float(np.trapezoid(mom, th) / np.trapezoid(spm1, th)),
+        "ratio_se": se,
     }
 
 
