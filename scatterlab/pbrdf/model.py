@@ -440,10 +440,21 @@ class Model:
 
 
 DHR_ROUNDING = 1e-14
-"""A specular DHR this close to 1 is 1: the tables and quadratures are accurate to about 1e-15
-absolute, so a smaller deficit ``1 - rho`` is rounding, not diffuse light. Without this the diffuse
-factor of a smooth surface near normal incidence was 5.6e-16 or 0 depending on the DHR's code path,
-and far from the lobe (where Gamma underflows) the DOLP flipped between 0 and the facet's DOLP."""
+"""A specular DHR this close to 1 is 1: a smaller deficit ``1 - rho`` is floating-point rounding, not
+diffuse light. Without this the diffuse factor of a smooth surface near normal incidence was 5.6e-16
+or 0 depending on the DHR's code path, and far from the lobe (where Gamma underflows) the DOLP flipped
+between 0 and the facet's DOLP.
+
+The shipped DHR tables themselves are accurate only to 5e-7-1.5e-6 absolute
+(:attr:`~scatterlab.pbrdf.dhr.DHRTable.max_error`), and a scalar and an array roughness read them along
+different paths (a 1-D resampling and the 2-D spline) that differ by up to 4e-8. So a deficit between
+1e-14 and about 1e-6 is within the table's error, and where the lobe underflows (a smooth surface far
+from its lobe) the DOLP of that remaining diffuse light can still differ between the paths: 0 with an
+array sigma of 0.00233 and no shadowing at 61.7 / 49.9 deg, phi 192 deg, where a scalar sigma has no
+light (NaN) and the inversion's formula the facet's DOLP (measured 29 Nov 2026). That light is below
+1e-6 / pi per steradian of the illumination. Raising this threshold to the tables' error removes the
+difference but turns that light off for rougher surfaces too (sigma 0.05 far from its lobe), so it
+stays at rounding."""
 
 
 def _deficit(rho):
