@@ -295,6 +295,7 @@ def _fit_mueller(args) -> int:
     import numpy as np
 
     from scatterlab.ellipsometry import fit_pbrdf
+    from scatterlab.ellipsometry.pbrdf_fit import BOUNDS
     from scatterlab.ellipsometry.report import write_fit_report
     from scatterlab.io import read_mueller_brdf
 
@@ -323,8 +324,15 @@ def _fit_mueller(args) -> int:
                 "--wavelength-um"
             )
         t0 = time.perf_counter()
-        if args.sigma is not None and not 0.01 <= args.sigma <= 1.5:
-            raise ValueError(f"--sigma must be a known rms slope in [0.01, 1.5], got {args.sigma}")
+        if args.sigma is not None and not 1e-3 <= args.sigma <= 1.5:
+            raise ValueError(f"--sigma must be a known rms slope in [0.001, 1.5], got {args.sigma}")
+        # a known roughness below the fitted range's lower edge (0.01) is held, not fitted: the range
+        # reaches down to it (fit-ellipsometry and analyze take the same [0.001, 1.5])
+        bounds = (
+            BOUNDS
+            if args.sigma is None
+            else BOUNDS[:2] + ((min(BOUNDS[2][0], args.sigma), BOUNDS[2][1]),)
+        )
         fit = fit_pbrdf(
             data,
             shadowing=args.shadowing,
@@ -332,6 +340,7 @@ def _fit_mueller(args) -> int:
             posterior_steps=args.posterior_steps,
             rng=args.seed,
             sigma=args.sigma,
+            bounds=bounds,
         )
         report = write_fit_report(
             data,
@@ -597,7 +606,7 @@ def _add_fit_mueller(sub):
         "--sigma",
         type=float,
         default=None,
-        help="known roughness (rms facet slope, 0.01-1.5), held fixed; default: fitted",
+        help="known roughness (rms facet slope, 0.001-1.5), held fixed; default: fitted",
     )
     fm.add_argument(
         "--column",

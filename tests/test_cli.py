@@ -1,3 +1,5 @@
+import warnings
+
 import pytest
 
 from scatterlab.cli import main
@@ -124,7 +126,16 @@ def test_fit_mueller_fits_a_scatmech_style_file_and_writes_its_report(tmp_path, 
     assert metrics["options"]["sigma_known"] == 0.3 and metrics["errors"]["sigma"] is None
     assert metrics["n"] == pytest.approx(1.39, abs=4 * metrics["errors"]["n"])
     assert main(argv[:-1] + ["3"]) == 2
-    assert "--sigma must be a known rms slope in [0.01, 1.5], got 3" in capsys.readouterr().err
+    assert "--sigma must be a known rms slope in [0.001, 1.5], got 3" in capsys.readouterr().err
+    # a smooth surface's known roughness below the fitted range (0.01) is held too, as fit-ellipsometry
+    # and analyze take it; these data are of a rough one (0.3), whose off-specular light a surface of
+    # 0.005 cannot give, and the fit says the data then do not determine n and kappa
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")  # the CLI prints a warning as a line of its own
+        assert main(argv[:-1] + ["0.005"]) == 0
+    said = capsys.readouterr()
+    assert "sigma = 0.005 (known)" in said.out
+    assert "do not determine n and kappa" in said.err
 
 
 def test_fit_mueller_bad_input_exit_codes(tmp_path, capsys):
