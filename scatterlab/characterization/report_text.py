@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+from scatterlab.characterization.estimation import DETERMINED_CONTRACTION
+
 __all__ = ["report_markdown"]
 
 
@@ -449,6 +451,38 @@ def _pixel_bound_note(results, failed) -> str:
     )
 
 
+def _ghost_counts(results) -> str:
+    """This run's wrongly-metal pixels of each corrected image against its degraded image's, with the
+    pixels scored, as a sentence that says whether the corrected images add ghosts."""
+    parts, more = [], False
+    for res in results:
+        for key, cor in res.metrics.items():
+            if not key.endswith("_corrected"):
+                continue
+            deg = res.metrics.get(key.replace("_corrected", "_degraded"), {})
+            c = cor.get("classification_vs_no_turbulence")
+            d = deg.get("classification_vs_no_turbulence")
+            if not c or not d:
+                continue
+            case = key.removesuffix("_corrected").replace("D_r0_", "D/r0 = ")
+            scored = [f"{x['pixels']:,}".replace(",", " ") for x in (c, d)]
+            ghosts = [round(x["false_metal"] * x["pixels"]) for x in (c, d)]
+            more |= ghosts[0] > ghosts[1]
+            parts.append(
+                f"{res.plate.metal}, {case}: {ghosts[0]} against {ghosts[1]} in the degraded image, "
+                f"of {scored[0]} and {scored[1]} pixels scored"
+            )
+    if not parts:
+        return ""
+    counts = "; ".join(parts)
+    if more:
+        return f"What a corrected image adds is its ghosts, pixels wrongly metal: {counts}."
+    return (
+        f"The corrected images here have no more pixels wrongly metal than the degraded ones ({counts}): "
+        "their excess is metal called paint, at the edges and scratches."
+    )
+
+
 def _failure_notes(results, checks, ideal, estimate="blind") -> list:
     """What the failed checks mean: the cause measured in this run, or what one run can and cannot show."""
     failed = [c for c, _, ok in checks if not ok]
@@ -492,9 +526,10 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
                 "hundredths, a pixel's noise is of that order, and any deconvolution raises the noise of "
                 "a pixel while the blur of the degraded image averages it. The paint's polarized light "
                 "is many times the metal's own, and the share of its halo a restoration leaves in the "
-                "metal raises the metal's DOLP as much as the blur does (bundled default scene, "
-                "aluminium at D/r0 7.9: +0.005-0.026 after correction, +0.004-0.020 degraded, on a true "
-                "0.003-0.016). With the true PSF the same restoration worsens the median too (aluminium "
+                "metal raises the metal's DOLP as much as the blur does. Measured once on the bundled "
+                "default scene (`docs/characterization_accuracy.md`; not this run's numbers): "
+                "aluminium at D/r0 7.9, +0.005-0.026 after correction, +0.004-0.020 degraded, on a true "
+                "0.003-0.016. With the true PSF the same restoration worsens the median too (aluminium "
                 "9.60 against 9.51 at D/r0 7.9, 13.64 against 11.90 at 12.9; on another draw of its "
                 "steel plate 1.51 against 1.21 and 1.71 against 1.42), and for aluminium the median "
                 "does not rank DOLP errors: removing the degraded image's metal bias (from the truth) "
@@ -508,12 +543,11 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
                 "\n- **The classification** unmixes the Stokes images, which puts the plate's edges "
                 "where they are in the degraded and the corrected images alike. Neither classifies the "
                 "scratches, one or two pixels wide: the blur leaves them less than half metal, and they "
-                "are most "
-                "of the classification error left in both images. What a corrected image adds is its "
-                "ghosts: on the bundled default scene's aluminium plate at 50 deg, 40 pixels wrongly "
-                "metal against 16 in the degraded image at D/r0 7.9, and 13 against 0 at 12.9, of the "
-                "12 544 pixels scored. With the true PSF the same restoration leaves 42 and 223 "
-                "pixels wrong against the degraded image's 377 and 397: the blind PSF holds it back."
+                "are most of the classification error left in both images. "
+                + _ghost_counts(results)
+                + " Measured once on the bundled default scene (`docs/characterization_accuracy.md`), "
+                "the true PSF with the same restoration leaves 42 and 223 of 12 544 pixels wrong "
+                "against the degraded image's 377 and 397: the blind PSF holds it back."
             )
         text += (
             "\n- **What identifies the PSF.** Two defocused cameras beside the polarimeter (phase "
@@ -521,17 +555,35 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
             "scene at D/r0 7.9 but not at 12.9 (`docs/characterization_accuracy.md`)."
         )
         notes.append(text)
-    # a metal's marginal interval follows the prior along its ridge of equal DOLP: its note says so
-    metal = {res.plate.metal for res in results}
-    ridge = [
-        c for c in failed if "covers the truth" in c and any(f": {m} posterior" in c for m in metal)
-    ]
+    # a metal's marginal interval follows the prior along its ridge of equal DOLP where the data
+    # determine the parameter only partly (contraction below DETERMINED_CONTRACTION): its note says so;
+    # a miss where the data do determine it is the error model's, and says that instead
+    ridge, determined = [], []
+    for res in results:
+        post = res.metrics.get("no_turbulence", {}).get(f"posterior_{res.plate.metal}") or {}
+        for q in ("n", "kappa"):
+            check = f"{res.plate.metal}: {res.plate.metal} posterior 68 % interval of {q} covers"
+            if not any(c.startswith(check) for c in failed):
+                continue
+            c = post.get(q, {}).get("contraction")
+            weak = c is not None and c < DETERMINED_CONTRACTION
+            (ridge if weak else determined).append(f"{res.plate.metal}'s {q}")
     if ridge:
         notes.append(
-            f"- **{len(ridge)} of the metals' marginal 68 % intervals miss the truth.** A metal's DOLP at "
-            "these geometries fixes only a combination of n and kappa: its marginal interval follows "
-            "the prior along that ridge (the note below its posterior table gives the contraction) and "
-            "is not a calibrated statement; its joint (n, kappa) region is."
+            f"- **{len(ridge)} of the metals' marginal 68 % intervals miss the truth where the data "
+            f"determine the parameter only partly ({', '.join(ridge)}).** A metal's DOLP at these "
+            "geometries fixes only a combination of n and kappa: its marginal interval follows the "
+            "prior along that ridge (the note below its posterior table gives the contraction) and is "
+            "not a calibrated statement; its joint (n, kappa) region is."
+        )
+    if determined:
+        notes.append(
+            f"- **{len(determined)} of the metals' marginal 68 % intervals miss the truth where the data "
+            f"do determine the parameter ({', '.join(determined)}; posterior contraction at least "
+            f"{DETERMINED_CONTRACTION:g}).** This is not the ridge: the interval is narrower than the "
+            "errors left in the data, or a 68 % interval missing as it will one time in three. The "
+            "posterior table says whether the joint region covers; the coverage study "
+            "(`studies/characterization_coverage.py`) measures the calibration over many seeds."
         )
     if any("statements" in c for c in failed):
         notes.append(

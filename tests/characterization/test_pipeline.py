@@ -301,8 +301,30 @@ def test_failure_notes_give_the_cause_of_a_failure_after_deconvolution():
         "",
         False,
     )
-    text = "\n".join(_failure_notes([res], [ridge], Ideal()))
-    assert "1 of the metals' marginal 68 % intervals miss" in text
+    # the ridge's note only where the data determine the parameter partly (contraction < 0.9); a
+    # determined parameter's miss is the error model's (or chance), not the ridge's
+    for contraction, said, unsaid in (
+        (0.3, "only partly (steel's n)", "do determine"),
+        (0.98, "do determine the parameter (steel's n", "only partly"),
+    ):
+        res.metrics["no_turbulence"]["posterior_steel"] = {"n": {"contraction": contraction}}
+        text = "\n".join(_failure_notes([res], [ridge], Ideal()))
+        assert "1 of the metals' marginal 68 % intervals miss" in text
+        assert said in text and unsaid not in text
+    # the corrected image's ghosts are this run's counts, not another run's
+    res.metrics["D_r0_7.9_corrected"]["classification_vs_no_turbulence"] = {
+        "false_metal": 0.01,
+        "pixels": 3136,
+    }
+    res.metrics["D_r0_7.9_degraded"] = {
+        "classification_vs_no_turbulence": {"false_metal": 0.0, "pixels": 3000}
+    }
+    text = "\n".join(_failure_notes([res], checks, Ideal()))
+    assert (
+        "adds is its ghosts, pixels wrongly metal: steel, D/r0 = 7.9: 31 against 0 in the degraded image, of 3 136 and 3 000"
+        in text
+    )
+    assert "12 544 pixels scored" not in text
     many = ("no turbulence: the 68 % statements (...) miss the truth no more often ...", "", False)
     assert "More statements miss" in "\n".join(_failure_notes([res], [many], Ideal()))
 
