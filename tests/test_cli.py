@@ -249,7 +249,7 @@ def test_fit_dolp_bad_tables_are_one_line_errors(tmp_path, capsys):
         (_dolp_table(tmp_path / "c.csv", "theta_i,dolp", rows), "give both theta_i and theta_r"),
         (
             _dolp_table(tmp_path / "d.csv", "theta,dolp", np.c_[[30.0, 95, 50], rows[:, 1]]),
-            "outside [0, 90]",
+            "outside [-90, 90]",
         ),
         (str(tmp_path / "missing.csv"), "no such file"),
     ]

@@ -27,6 +27,7 @@ from scatterlab.io.table import (
     format_table,
     mapped_columns_note,
     read_table,
+    signed_polar,
     warn_if_header_disagrees,
     warn_if_radians,
 )
@@ -109,7 +110,8 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
     ------
     ValueError
         Naming the file, line and column: missing DOLP or angle columns, non-numeric or non-finite cells,
-        polar angles outside [0, 90] deg, a DOLP outside [-0.05, 1.05] (noise aside, a DOLP is in
+        polar angles beyond 90 deg (a negative one is read as the other side of the normal: |theta|,
+        the azimuth + 180 deg), a DOLP outside [-0.05, 1.05] (noise aside, a DOLP is in
         [0, 1]), a standard deviation <= 0, fewer than two rows.
     """
     f = angle_factor(angle_unit)
@@ -140,14 +142,26 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
     else:
         theta_i, theta_r = angles(ti), angles(tr)
         polar = [(ti, theta_i), (tr, theta_r)]
+    # signed in-plane angles: |theta| with the azimuth turned by pi (the DOLP does not change under the
+    # mirror that folds the relative azimuth back)
+    turn = np.zeros(theta_i.shape, bool)
+    folded = []
     for i, v in polar:
-        bad = (v < 0) | (v > np.pi / 2 + 1e-12)
-        if bad.any():
-            row = int(np.argmax(bad))
-            raise ValueError(
-                f"{table.where(row)}, column {table.names[i]!r}: polar angle {table.values[row, i]} "
-                f"{angle_unit} is outside [0, 90] deg"
+        theta, turned = signed_polar(table, i, v, f)
+        folded.append(theta)
+        if len(polar) == 2:
+            turn ^= turned
+        if turned.any():
+            how = (
+                "the azimuth + 180 deg"
+                if len(polar) == 2
+                else "both directions on the other side of the normal: phi unchanged"
             )
+            notes.append(
+                f"column {table.names[i]!r}: {int(turned.sum())} signed angle(s) < 0 read as "
+                f"|theta| ({how})"
+            )
+    theta_i, theta_r = (folded[0], folded[0]) if len(polar) == 1 else folded
     warn_if_radians(table.path, (theta_i, theta_r), f, stacklevel=2)
     pi = col("phi", False)
     phi = np.full(theta_i.shape, np.pi) if pi is None else angles(pi)
@@ -162,6 +176,7 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
             )
     if pi is None:
         notes.append("no azimuth column: phi = 180 deg (observation in the plane of incidence)")
+    phi = np.where(turn, np.mod(phi + np.pi, 2 * np.pi), phi)
     di = col("dolp")
     dolp = table.values[:, di]
     bad = (dolp < -0.05) | (dolp > 1.05)

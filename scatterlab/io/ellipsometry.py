@@ -35,6 +35,7 @@ from scatterlab.io.table import (
     length_factor,
     mapped_columns_note,
     read_table,
+    signed_polar,
     time_convention_flip,
     warn_if_header_disagrees,
     warn_if_radians,
@@ -133,27 +134,28 @@ def read_ellipsometry(
     ------
     ValueError
         Naming the file, line and column: missing angle or element columns, non-numeric or
-        non-finite cells, angles outside [0, 90] deg, elements outside [-1 - tolerance, 1 +
-        tolerance], negative standard deviations, several wavelengths in one file.
+        non-finite cells, angles beyond 90 deg (a negative one is the mirror geometry: |theta|),
+        elements outside [-1 - tolerance, 1 + tolerance], negative standard deviations, several
+        wavelengths in one file.
     """
     opt = ReaderOptions.of(angle_unit, wavelength_unit, time_convention, tolerance)
     table = read_table(path)
     warn_if_header_disagrees(table, angle_unit, time_convention)
     ai = table.find(_ANGLE, "theta", columns=columns)
     table.check_unit(ai, "deg" if opt.angle != 1.0 else "rad", table.names[ai], "angle_unit")
-    theta = table.values[:, ai] * opt.angle
-    bad = (theta < 0) | (theta > np.pi / 2 + 1e-12)
-    if bad.any():
-        row = int(np.argmax(bad))
-        raise ValueError(
-            f"{table.where(row)}, column {table.names[ai]!r}: angle {table.values[row, ai]} "
-            f"{angle_unit} is outside [0, 90] deg"
-        )
+    # a signed angle of incidence is the mirror geometry, whose in-plane block (m12, m22, m33, m34) is
+    # the same (R M R with R = diag(1, 1, -1, -1) leaves it): |theta|
+    theta, turned = signed_polar(table, ai, table.values[:, ai] * opt.angle, opt.angle, "angle")
     warn_if_radians(table.path, (theta,), opt.angle, stacklevel=2)
     wavelength = _wavelength(table, columns, opt.length)
     E, S = _elements(table, theta.size, opt.tolerance, columns)
     _warn_if_m12_negative(table.path, E[:, 0], None if S is None else S[:, 0])
     notes = []
+    if turned.any():
+        notes.append(
+            f"{int(turned.sum())} signed angle(s) < 0 read as |theta| (the mirror geometry, whose "
+            "in-plane elements are the same)"
+        )
     if opt.flip:
         E[:, 3] = -E[:, 3]
         notes.append(f"time convention {time_convention}: M23 sign-flipped to exp(+jwt)")

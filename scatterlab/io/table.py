@@ -127,6 +127,63 @@ def warn_if_radians(path, polar, factor: float, stacklevel: int = 2) -> None:
         )
 
 
+def signed_polar(table, i: int, theta, factor: float, what: str = "polar angle"):
+    """In-plane polar angles that may be signed -> ``(|theta|, turned)``.
+
+    A goniometer's negative polar angle is the direction on the other side of the normal: ``|theta|``
+    with its azimuth turned by pi (``docs/conventions.md``). The caller turns the azimuth where
+    ``turned``.
+
+    Parameters
+    ----------
+    table : Table
+        The file as read (for the message's line and column).
+    i : int
+        The column.
+    theta : ndarray, shape (N,)
+        Its angles [rad].
+    factor : float
+        The file's angle unit in rad (1.0: radians), for the message.
+    what : str
+        What the angle is, for the message.
+
+    Returns
+    -------
+    theta : ndarray, shape (N,)
+        ``|theta|`` [rad], in [0, pi/2].
+    turned : ndarray of bool, shape (N,)
+        Rows given with a negative angle.
+
+    Raises
+    ------
+    ValueError
+        Naming the file, line and column, for ``|theta|`` beyond 90 deg; in a file read in radians,
+        a value that would be a polar angle in degrees is said to look like one.
+    """
+    theta = np.asarray(theta, float)
+    bad = np.abs(theta) > np.pi / 2 + 1e-12
+    if bad.any():
+        row = int(np.argmax(bad))
+        value = table.values[row, i]
+        if factor == 1.0:
+            limits = "[-pi/2, pi/2] rad, i.e. -90 to 90 deg"
+            hint = (
+                "; it looks like degrees: read the file with angle_unit='deg' (--angle-unit deg), "
+                "every angle column takes the same unit"
+                if abs(value) <= 90
+                else ""
+            )
+        else:
+            limits, hint = "[-90, 90] deg", ""
+        unit = "rad" if factor == 1.0 else "deg"
+        raise ValueError(
+            f"{table.where(row)}, column {table.names[i]!r}: {what} {value} {unit} is outside "
+            f"{limits} (a negative angle is the other side of the normal){hint}"
+        )
+    turned = theta < 0
+    return np.abs(theta), turned
+
+
 def warn_if_header_disagrees(
     table, angle_unit: str | None = None, time_convention: str | None = None, stacklevel: int = 2
 ) -> None:

@@ -31,9 +31,41 @@ def test_radians_read_as_degrees_are_pointed_out(tmp_path):
 
 
 def test_polar_angles_beyond_90_deg_are_refused(tmp_path):
-    path = _write(tmp_path / "bad.csv", [30, 95], [0.3, 0.5])
-    with pytest.raises(ValueError, match=r"outside \[0, 90\] deg"):
+    path = _write(tmp_path / "bad.csv", [30, -95], [0.3, 0.5])
+    with pytest.raises(
+        ValueError, match=r"line 3, column 'theta'.*-95.0 deg is outside \[-90, 90\] deg"
+    ):
         read_dolp_table(path)
+
+
+def test_degrees_read_as_radians_are_pointed_out(tmp_path):
+    path = _write(tmp_path / "deg.csv", [30, 60], [0.3, 0.5])
+    with pytest.raises(ValueError, match=r"30.0 rad is outside .* it looks like degrees"):
+        read_dolp_table(path, angle_unit="rad")
+
+
+def test_signed_in_plane_angles_are_the_other_side_of_the_normal(tmp_path):
+    """docs/conventions.md: a negative polar angle is |theta| with the azimuth turned by pi. The
+    independent truth is the pBRDF's DOLP of the geometry written out explicitly: (40, -40, phi 180)
+    is back-scatter (40, 40, phi 0), (-30, 50, phi 90) is (30, 50, phi 270); a signed specular
+    angle turns both directions and leaves phi at 180."""
+    from scatterlab.inversion import model_dolp
+
+    path = tmp_path / "signed.csv"
+    path.write_text("theta_i,theta_r,phi,dolp\n40,-40,180,0.1\n-30,50,90,0.2\n-20,-60,180,0.3\n")
+    data = read_dolp_table(path)
+    explicit = np.radians([[40, 40, 0], [30, 50, 270], [20, 60, 180]])
+    np.testing.assert_allclose(np.c_[data.theta_i, data.theta_r, data.phi], explicit, atol=1e-12)
+    assert sum("signed angle" in note for note in data.notes) == 2
+    eta = (1.5, 0.01)
+    got = model_dolp(*eta, 0.3, data.theta_i, data.theta_r, data.phi)
+    want = model_dolp(*eta, 0.3, *explicit.T)
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    spec = _write(tmp_path / "spec.csv", [-40, 50], [0.3, 0.5])
+    data = read_dolp_table(spec)
+    np.testing.assert_allclose(np.degrees(data.theta_i), [40, 50])
+    np.testing.assert_allclose(data.theta_r, data.theta_i)
+    np.testing.assert_allclose(data.phi, np.pi)
 
 
 def test_ellipsometry_in_radians_read_as_degrees_is_pointed_out(tmp_path):

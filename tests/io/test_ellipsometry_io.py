@@ -66,7 +66,7 @@ def test_zero_based_names_absolute_first_element_and_radians(tmp_path):
         ("theta,m12,m22,m33,m34", "10,0,1,inf,0", "line 2, column 'm33'.*not a finite"),
         ("theta,m12,m22,m33,m34", "10,0,nan,1,0", "line 2, column 'm22'.*not a finite"),
         ("theta,m12,m22,m33,m34", "10,0,1,1", "line 2: 4 values for 5 columns"),
-        ("theta,m12,m22,m33,m34", "-5,0,1,1,0", "line 2, column 'theta'.*outside"),
+        ("theta,m12,m22,m33,m34", "-95,0,1,1,0", "line 2, column 'theta'.*outside"),
         (
             "theta,m12,m22,m33,m34,std_m12,std_m22,std_m33,std_m34",
             "10,0,1,1,0,0.1,-0.1,0.1,0.1",
@@ -184,3 +184,17 @@ def test_a_negated_m12_column_is_pointed_out(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         read_ellipsometry(write_ellipsometry(tmp_path / "s.csv", small))
+
+
+def test_a_signed_angle_of_incidence_is_the_mirror_geometry(tmp_path):
+    """A negative angle of incidence is the mirror image of the geometry; the mirror R M R (R = diag(1,
+    1, -1, -1)) leaves m12, m22, m33 and m34, so the elements read are those of |theta|."""
+    from scatterlab.io import read_ellipsometry
+
+    signed, plain = tmp_path / "s.csv", tmp_path / "p.csv"
+    signed.write_text("theta,m12,m22,m33,m34\n-50,-0.2,1,0.9,0.3\n60,-0.3,1,0.8,0.5\n")
+    plain.write_text("theta,m12,m22,m33,m34\n50,-0.2,1,0.9,0.3\n60,-0.3,1,0.8,0.5\n")
+    a, b = read_ellipsometry(signed), read_ellipsometry(plain)
+    np.testing.assert_array_equal(a.theta, b.theta)
+    np.testing.assert_array_equal(a.elements, b.elements)
+    assert any("1 signed angle(s)" in note for note in a.notes)
