@@ -209,20 +209,28 @@ def _analyze(args) -> int:
             f"scatterlab: --seed must be a non-negative integer, got {args.seed}", file=sys.stderr
         )
         return 2
-    settings = AnalyzeSettings(
-        psf=args.psf,
-        iterations=args.iterations,
-        priors=args.priors,
-        sigma=args.sigma,
-        posterior_steps=args.posterior_steps,
-        seed=args.seed,
-        classes=args.classes,
-        bias_samples=args.bias_samples,
-        model_error=args.model_error,
-        frames=args.frames,
-        psf_refine=args.psf_refine,
-        blind_starts=args.blind_starts,
-    )
+    given = {
+        "psf": args.psf,
+        "iterations": args.iterations,
+        "priors": args.priors,
+        "sigma": args.sigma,
+        "posterior_steps": args.posterior_steps,
+        "seed": args.seed,
+        "classes": args.classes,
+        "bias_samples": args.bias_samples,
+        "model_error": args.model_error,
+        "frames": args.frames,
+        "psf_refine": args.psf_refine,
+        "blind_starts": args.blind_starts,
+    }
+    try:
+        settings = AnalyzeSettings(**given).validate()
+    except ValueError as exc:
+        # the settings name their field ("bias_samples must be ..."); on the command line it is a flag
+        name, _, rest = str(exc).partition(" ")
+        flag = f"--{name.replace('_', '-')}" if name in given else name
+        print(f"scatterlab: {flag} {rest}", file=sys.stderr)
+        return 2
 
     if args.full_well is not None and not (math.isfinite(args.full_well) and args.full_well > 0):
         print(
@@ -404,6 +412,11 @@ def _fit_dolp(args) -> int:
             raise ValueError(f"--sigma must be a known rms slope in [0.001, 2.5], got {args.sigma}")
         if args.noise is not None and not (np.isfinite(args.noise) and args.noise > 0):
             raise ValueError(f"--noise must be a DOLP standard deviation > 0, got {args.noise}")
+        if args.posterior_steps is not None and args.posterior_steps < 20:
+            raise ValueError(
+                "--posterior-steps must be an integer >= 20 (or left out: run until converged), "
+                f"got {args.posterior_steps}"
+            )
         from pathlib import Path
 
         data = _read_noting(
@@ -527,7 +540,7 @@ def _add_fit_dolp(sub):
         "--posterior-steps",
         type=int,
         default=None,
-        help="MCMC chain length (default: run until converged)",
+        help="MCMC chain length, >= 20 (default: run until converged)",
     )
     fd.add_argument("--seed", type=int, default=20101210, help="random seed (default 20101210)")
     fd.add_argument(
@@ -569,7 +582,9 @@ def _add_file_and_model_options(parser, flip: str, wavelength: str) -> None:
         help=f"the file's time convention ({flip}; also exp(-jwt), exp(+iwt), with spaces or omega)",
     )
     parser.add_argument(
-        "--shadowing", default="torrance-sparrow", help="pBRDF shadowing (torrance-sparrow, none)"
+        "--shadowing",
+        default="torrance-sparrow",
+        help="pBRDF shadowing (torrance-sparrow, smith, none)",
     )
     parser.add_argument(
         "--diffuse",

@@ -259,6 +259,9 @@ def test_fit_dolp_bad_tables_are_one_line_errors(tmp_path, capsys):
         assert message in err and "Traceback" not in err, err
     assert main(["fit-dolp", cases[0][0], "--sigma", "-1", "--out", str(tmp_path / "o")]) == 2
     assert "--sigma must be" in capsys.readouterr().err
+    argv = ["fit-dolp", cases[0][0], "--posterior-steps", "-5", "--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    assert "--posterior-steps must be an integer >= 20" in capsys.readouterr().err
 
 
 def test_fit_dolp_column_names_a_users_column(tmp_path, capsys):

@@ -74,7 +74,11 @@ def test_analyze_cli_reads_a_tiff_stack_with_its_sidecar_and_names_wrong_files(t
     assert "iterations" in capsys.readouterr().err
     h5 = str(EXAMPLES / "painted_plate.h5")
     assert main(["analyze", h5, "--out", str(tmp_path / "d"), "--bias-samples", "0"]) == 2
-    assert "bias_samples must be in [1, 20]" in capsys.readouterr().err
+    assert (
+        "--bias-samples must be in [1, 20], got 0" in capsys.readouterr().err
+    )  # the flag, not the field
+    assert main(["analyze", h5, "--out", str(tmp_path / "d"), "--posterior-steps", "5"]) == 2
+    assert "--posterior-steps must be in [100, 1000000], got 5" in capsys.readouterr().err
     with pytest.raises(SystemExit):  # argparse: not one of the choices
         main(["analyze", h5, "--out", str(tmp_path / "e"), "--classes", "kmeans"])
     with pytest.raises(ValueError, match="model_error must be True or False"):

@@ -321,8 +321,8 @@ def test_failure_notes_give_the_cause_of_a_failure_after_deconvolution():
     }
     text = "\n".join(_failure_notes([res], checks, Ideal()))
     assert (
-        "adds is its ghosts, pixels wrongly metal: steel, D/r0 = 7.9: 31 against 0 in the degraded image, of 3 136 and 3 000"
-        in text
+        "adds is its ghosts, pixels wrongly metal: steel, D/r0 = 7.9: 31 against 0 in the degraded "
+        "image, of 3 136 and 3 000" in text
     )
     assert "12 544 pixels scored" not in text
     many = ("no turbulence: the 68 % statements (...) miss the truth no more often ...", "", False)
