@@ -642,7 +642,9 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
             im = ax.imshow(
                 img, cmap=cmap, vmin=lim[0] if lim else None, vmax=lim[1] if lim else None
             )
-            fig.colorbar(im, ax=ax, shrink=0.8)
+            # S0 of the restoration is in photo-electrons per pixel (both polarizations)
+            unit = {"sqrt(S0)": "sqrt(S0) [sqrt(e-)]"}.get(title, title)
+            fig.colorbar(im, ax=ax, shrink=0.8, label=unit)
         if title in ("n", "kappa") and truths:
             k = 0 if title == "n" else 1
             title += f" (truth: paint {truths['paint'][k]:.2f}, metal {truths['metal'][k]:.2f})"
