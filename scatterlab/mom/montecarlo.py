@@ -35,7 +35,8 @@ class IncoherentResult:
 
     ``energy`` (P, I) is each partition's reflected power (the coefficient integrated over theta_s);
     ``transmitted`` (P, I) the power into a lossless lower medium (NaN where undefined: PEC, absorbing or
-    impedance-condition surfaces).
+    impedance-condition surfaces); ``per_partition`` (P, I, S) [1/rad] each partition's coefficient,
+    for resampling estimates (jackknife, bootstrap) of statistics other than the mean.
     """
 
     theta_i: np.ndarray
@@ -51,6 +52,7 @@ class IncoherentResult:
     transmitted: np.ndarray | None = None
     polarization: str = "s"
     eta: complex | None = None
+    per_partition: np.ndarray | None = None
 
 
 def partition_task(task):
@@ -313,4 +315,5 @@ def _average(done, partitions, theta_i, theta_s, wavelength, g, polarization, et
         transmitted=np.stack([done[p][5] for p in range(partitions)]),
         polarization=polarization,
         eta=eta,
+        per_partition=coef,
     )

@@ -227,3 +227,10 @@ def test_incoherent_average_checkpoints_and_resumes(tmp_path):
     np.testing.assert_allclose(resumed.mean, full.mean, rtol=1e-10)
     assert np.all(np.abs(full.energy - 1) < 0.005)
     assert np.all(full.stderr > 0) and np.all(full.incoherent <= full.mean + 1e-15)
+    # each partition's own coefficient: the mean and standard error are theirs, and a resumed run
+    # carries the same ones (the first two partitions solved by the shorter run)
+    assert full.per_partition.shape == (4, 2, 33)
+    np.testing.assert_allclose(full.per_partition.mean(0), full.mean, rtol=1e-12)
+    np.testing.assert_allclose(full.per_partition.std(0, ddof=1) / 2, full.stderr, rtol=1e-12)
+    np.testing.assert_allclose(resumed.per_partition, full.per_partition, rtol=1e-10)
+    np.testing.assert_allclose(part.per_partition, full.per_partition[:2], rtol=1e-10)
