@@ -584,7 +584,8 @@ def _add_file_and_model_options(parser, flip: str, wavelength: str) -> None:
     parser.add_argument(
         "--shadowing",
         default="torrance-sparrow",
-        help="pBRDF shadowing (torrance-sparrow, smith, none)",
+        choices=["torrance-sparrow", "smith", "none"],  # scatterlab.pbrdf.shadowing.SHADOWING
+        help="pBRDF shadowing",
     )
     parser.add_argument(
         "--diffuse",

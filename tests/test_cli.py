@@ -412,3 +412,16 @@ def test_fit_ellipsometry_column_and_bad_file(tmp_path, capsys):
     assert main(argv) == 0
     assert "radians read as degrees" in capsys.readouterr().err
     assert "radians read as degrees" in (tmp_path / "r" / "report.md").read_text()
+
+
+def test_shadowing_choices_are_the_models_and_are_checked_before_reading(tmp_path, capsys):
+    """--shadowing offers exactly the pBRDF's shadowing models, and a wrong one stops the command
+    before the file is read (argparse), not after."""
+    from scatterlab.pbrdf.shadowing import SHADOWING
+
+    with pytest.raises(SystemExit):
+        main(["fit-mueller", str(tmp_path / "missing.csv"), "--shadowing", "foo"])
+    err = capsys.readouterr().err
+    assert "invalid choice: 'foo'" in err and "no such file" not in err
+    for name in SHADOWING:
+        assert f"'{name}'" in err
