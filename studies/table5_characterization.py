@@ -212,7 +212,8 @@ def _findings(ctx, summary, cfg):
         + "Corrected metal kappa against Table 5: "
         + "; ".join(
             f"{c['name'].split(' corrected')[0]} ours {c['ours']:.2f}, published "
-            f"{c['published']:.2f} ({r:+.0%})"
+            f"{c['published']:.2f} "
+            + (f"({r:+.0%})" if np.isfinite(r) else "(no metal pixel fitted: no mean)")
             for c, r in zip(kap, rel)
         )  # fmt: skip
         + (
@@ -229,10 +230,20 @@ def _findings(ctx, summary, cfg):
         "text's reason). The pipeline's report (characterization/report.md) has the DOLP, S0 and "
         "classification errors behind these numbers."
     )
+    # a case whose corrected metal has no fitted pixel has no mean (NaN): said, not min/max'ed into nan
+    finite = [r for r in rel if np.isfinite(r)]
+    kappa_range = (
+        f"{min(finite):+.0%}..{max(finite):+.0%} vs published"
+        if finite
+        else "not measured (no metal pixel fitted)"
+    ) + (
+        f" ({len(rel) - len(finite)} of {len(rel)} without a mean)"
+        if len(finite) < len(rel)
+        else ""
+    )
     set_verdict(
         ctx,
         "reproduced" if kept == len(ratio) else "partly" if kept else "not reproduced",
         f"paint sd(n) shrink {min(ratio):.1f}-{max(ratio):.1f}x (published "
-        f"{min(pub_ratio):.1f}-{max(pub_ratio):.1f}x); corrected metal kappa "
-        f"{min(rel):+.0%}..{max(rel):+.0%} vs published",
+        f"{min(pub_ratio):.1f}-{max(pub_ratio):.1f}x); corrected metal kappa {kappa_range}",
     )
