@@ -300,6 +300,45 @@ def set_verdict(ctx, verdict, headline):
     ctx.metrics["headline"] = str(headline)
 
 
+def t_factor(n):
+    """Two-sided 95 % coverage factor of a standard error estimated from ``n`` Monte-Carlo draws
+    (realizations, partitions, groups): Student's t with n - 1 degrees of freedom (2.57 for 6, 1.98
+    for 100), since with few draws the standard error is itself uncertain. inf below two draws.
+
+    Parameters
+    ----------
+    n : int
+        Number of draws.
+
+    Returns
+    -------
+    float
+    """
+    from scipy.stats import t as student_t
+
+    return float(student_t.ppf(0.975, n - 1)) if n > 1 else float("inf")
+
+
+def jackknife_se(loo):
+    """Jackknife standard error from the leave-one-out values ``loo`` (G, ...) of G draws or groups:
+    sqrt((G - 1) / G * sum_g (loo_g - mean)^2). NaN with fewer than two.
+
+    Parameters
+    ----------
+    loo : array_like, shape (G, ...)
+        The statistic recomputed with each draw (or group of draws) left out.
+
+    Returns
+    -------
+    ndarray, shape (...)
+    """
+    loo = np.asarray(loo, float)
+    G = len(loo)
+    if G < 2:
+        return np.full(loo.shape[1:], np.nan)
+    return np.sqrt((G - 1) / G * np.sum((loo - loo.mean(axis=0)) ** 2, axis=0))
+
+
 def compare(name, published, ours, u_published=0.0, u_ours=0.0, k=2.0, tol=0.0):
     """A like-for-like comparison of one number with its published value.
 

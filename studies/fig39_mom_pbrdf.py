@@ -44,8 +44,7 @@ the full run's, but its 95 % interval straddles the tolerance.
 """
 
 import numpy as np
-from scatterlab.studies._common import set_verdict
-from scipy.stats import t as student_t
+from scatterlab.studies._common import jackknife_se, set_verdict, t_factor
 
 from scatterlab.mom import correlation_length_for_slope, incoherent_scattering, rough_surface
 from scatterlab.pbrdf import PEC, Model
@@ -111,19 +110,9 @@ def lobe_stats(theta_s, curves, width=SMOOTH_SIN):
 
 def coverage(partitions):
     """Two-sided 95 % coverage factor of a jackknife standard error over ``partitions`` Monte-Carlo
-    partitions: Student's t with P - 1 degrees of freedom (2.57 for the quick run's 6, 1.98 for the
-    full run's 100), because with few partitions the standard error is itself uncertain. NaN for
+    partitions (:func:`t_factor`; 2.57 for the quick run's 6, 1.98 for the full run's 100). NaN for
     P < 2 (no standard error)."""
-    return float(student_t.ppf(0.975, partitions - 1)) if partitions > 1 else float("nan")
-
-
-def jackknife_se(loo):
-    """Jackknife standard error from the leave-one-partition-out values ``loo`` (P, ...)."""
-    loo = np.asarray(loo, float)
-    P = len(loo)
-    if P < 2:
-        return np.full(loo.shape[1:], np.nan)
-    return np.sqrt((P - 1) / P * np.sum((loo - loo.mean(axis=0)) ** 2, axis=0))
+    return t_factor(partitions) if partitions > 1 else float("nan")
 
 
 def lobe_jackknife(theta_s, coef, width=SMOOTH_SIN):
@@ -220,29 +209,16 @@ def _tail(theta_s, mom_n, ref_n):
     return float(np.mean(np.log10(ref_n[sel] / mom_n[sel]))) if sel.any() else float("nan")
 
 
-def scatter_partitions(x, y, theta_i, theta_s, partitions, executor, polarization="s"):
-    """:func:`incoherent_scattering` and each partition's coefficient (P, I, S), for the jackknife of
-    the lobe centres."""
-    res = incoherent_scattering(
-        x,
-        y,
-        1.0,
-        theta_i,
-        theta_s,
-        partitions=partitions,
-        executor=executor,
-        polarization=polarization,
-    )
-    return res, res.per_partition
-
-
 def taper_check(ctx, x, y, theta_s, partitions, standard, standard_lobe):
     """Grazing incidence (60, 75 deg) with the taper and the partition doubled (g = 75 wavelengths
     on 300 in full mode): the RMS log10 change of the s-pol lobe and its lobe centre (with its
     jackknife standard error), against the standard set-up's result ``standard`` and its
     :func:`lobe_jackknife` ``standard_lobe``."""
     ti = THETA_I[-2:]
-    doubled, coef = scatter_partitions(x, y, ti, theta_s, max(1, partitions // 2), ctx.executor)
+    doubled = incoherent_scattering(
+        x, y, 1.0, ti, theta_s, partitions=max(1, partitions // 2), executor=ctx.executor
+    )
+    coef = doubled.per_partition
     dl = lobe_jackknife(theta_s, coef)
     out = {}
     for j, t in enumerate(ti):
@@ -414,7 +390,17 @@ def run(ctx):
     by_pol, lobes = {}, {}
     for row, pol in enumerate(("s", "p")):
         with ctx.step(f"mom_{pol}"):
-            res, coef = scatter_partitions(x, y, THETA_I, theta_s, partitions, ctx.executor, pol)
+            res = incoherent_scattering(
+                x,
+                y,
+                1.0,
+                THETA_I,
+                theta_s,
+                partitions=partitions,
+                executor=ctx.executor,
+                polarization=pol,
+            )
+            coef = res.per_partition
         by_pol[pol], lobes[pol] = _panel(axes[row], res, coef, theta_s)
         if pol == "s":
             with ctx.step("taper_check"):

@@ -19,7 +19,7 @@ for contrast. Run time on the shared 2-core machine: quick 3.2 s, full 6.6 s (29
 """
 
 import numpy as np
-from scatterlab.studies._common import compare, set_verdict
+from scatterlab.studies._common import compare, jackknife_se, set_verdict
 from scipy import optimize
 
 from scatterlab.imaging import (
@@ -96,8 +96,7 @@ def _jackknife(otf_groups, R):
     misses."""
     total = otf_groups.sum(0)
     fits = np.array([_fit_short(*_mtf_profile(total - g, R))[0] for g in otf_groups])
-    G = len(fits)
-    return float(np.sqrt((G - 1) / G * np.sum((fits - fits.mean()) ** 2))), fits
+    return float(jackknife_se(fits)), fits
 
 
 def run(ctx):

@@ -16,7 +16,7 @@ about 80 s.
 """
 
 import numpy as np
-from scatterlab.studies._common import plate_observations, set_verdict
+from scatterlab.studies._common import plate_observations, set_verdict, t_factor
 
 from scatterlab.characterization.pipeline import interior
 from scatterlab.characterization.report import CLASS_COLOURS
@@ -152,13 +152,6 @@ def _mean_se(values):
     """Standard error of the mean of independent realizations' values (NaN with fewer than two)."""
     v = np.asarray(values, float)
     return float(v.std(ddof=1) / np.sqrt(v.size)) if v.size > 1 else float("nan")
-
-
-def t_factor(n):
-    """Two-sided 95 % Student t factor for the mean of ``n`` realizations (inf below two)."""
-    from scipy import stats
-
-    return float(stats.t.ppf(0.975, n - 1)) if n > 1 else float("inf")
 
 
 def _boundary_band(labels, width):

@@ -191,7 +191,9 @@ def test_fig39_grazing_offset_and_verdict_agree_across_seeds():
     found = []
     for seed in (20101210, 1):
         x, y = mod.surface(length, np.random.default_rng(seed))
-        _, coef = mod.scatter_partitions(x, y, mod.THETA_I, mod.THETA_S, partitions, None)
+        coef = mod.incoherent_scattering(
+            x, y, 1.0, mod.THETA_I, mod.THETA_S, partitions=partitions
+        ).per_partition
         lobe = mod.lobe_analysis(mod.THETA_S, coef)
         off = mod.offset_summary(lobe["pbrdf"], lobe, mod.GRAZING)
         d, u = off["offset_deg"], off["se_deg"]
