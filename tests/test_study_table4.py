@@ -1,0 +1,51 @@
+"""table4: whether correcting helps is judged on the paired change over the screens, not on one draw."""
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from scatterlab import study_runner
+
+T4 = study_runner.discover()["table4"].module
+
+
+def _res(x, deg, cor):
+    return {
+        f"D_r0_{x:g}_degraded": {"total_error": float(np.mean(deg)), "per_screen_total": deg},
+        f"D_r0_{x:g}_corrected": {"total_error": float(np.mean(cor)), "per_screen_total": cor},
+    }
+
+
+def test_paired_change_uses_the_screen_to_screen_scatter_of_the_differences():
+    deg, cor = [0.30, 0.32, 0.28, 0.30], [0.20, 0.21, 0.19, 0.20]
+    sel = np.ones(10**6, bool)  # binomial error 6e-4, below the screens' scatter
+    c = T4._paired_change(_res(7.9, deg, cor), 7.9, sel)
+    assert c["change"] == pytest.approx(-0.1)
+    # differences -0.10, -0.11, -0.09, -0.10: sd 0.008165, / sqrt(4)
+    assert c["se"] == pytest.approx(0.0081650 / 2, rel=1e-4)
+    assert c["factor"] == pytest.approx(stats.t.ppf(0.975, 3))
+
+
+def test_paired_change_of_one_screen_falls_back_to_the_binomial_error():
+    sel = np.ones(1600, bool)
+    c = T4._paired_change(_res(12.9, [0.4], [0.2]), 12.9, sel)
+    assert c["se"] == pytest.approx(np.hypot(np.sqrt(0.24 / 1600), np.sqrt(0.16 / 1600)))
+    assert c["factor"] == 2.0
+
+
+def test_change_tally_counts_only_changes_beyond_their_interval():
+    sel = np.ones(10**6, bool)
+    changes = [
+        T4._paired_change(_res(7.9, [0.30, 0.32, 0.28, 0.30], [0.20, 0.21, 0.19, 0.20]), 7.9, sel),
+        T4._paired_change(
+            _res(10.5, [0.30, 0.30, 0.30, 0.30], [0.31, 0.29, 0.32, 0.28]), 10.5, sel
+        ),
+        T4._paired_change(
+            _res(12.9, [0.20, 0.21, 0.19, 0.20], [0.25, 0.26, 0.24, 0.25]), 12.9, sel
+        ),
+    ]
+    text = T4._change_tally(changes)
+    assert "better beyond the 95 % interval in 1 of 3 cases, worse in 1" in text
+    assert "within the noise in 1" in text
+    # mean of -0.10, 0.00, +0.05
+    assert "on average over the 3 cases -0.017" in text
