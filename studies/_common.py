@@ -339,6 +339,35 @@ def jackknife_se(loo):
     return np.sqrt((G - 1) / G * np.sum((loo - loo.mean(axis=0)) ** 2, axis=0))
 
 
+def paired_change(base, other):
+    """Mean change from ``base`` to ``other`` paired draw by draw, with its standard error and 95 % interval.
+
+    For two methods applied to the same draws (acquisitions, screens, scenes): the draw-to-draw scatter
+    they share cancels in the differences, which a comparison of two separate means would count twice.
+
+    Parameters
+    ----------
+    base, other : array_like, shape (N,)
+        One number per draw, in the same order.
+
+    Returns
+    -------
+    dict
+        ``mean`` (other minus base), ``se`` (standard error over the N draws; inf for one draw),
+        ``half_width`` (95 % Student t half-width, :func:`t_factor`) and ``word``: "lower" or "higher"
+        where the interval excludes zero, else "no change resolved".
+    """
+    d = np.subtract(np.asarray(other, float), np.asarray(base, float))
+    if d.ndim != 1 or d.size == 0:
+        raise ValueError(
+            f"base and other must be two equal-length 1-D sequences, got shape {d.shape}"
+        )
+    se = float(np.std(d, ddof=1) / np.sqrt(d.size)) if d.size > 1 else float("inf")
+    mean, half = float(d.mean()), t_factor(d.size) * se
+    word = "lower" if mean + half < 0 else "higher" if mean - half > 0 else "no change resolved"
+    return {"mean": mean, "se": se, "half_width": half, "word": word}
+
+
 def compare(name, published, ours, u_published=0.0, u_ours=0.0, k=2.0, tol=0.0):
     """A like-for-like comparison of one number with its published value.
 
