@@ -357,11 +357,13 @@ def paired_change(base, other):
         ``half_width`` (95 % Student t half-width, :func:`t_factor`) and ``word``: "lower" or "higher"
         where the interval excludes zero, else "no change resolved".
     """
-    d = np.subtract(np.asarray(other, float), np.asarray(base, float))
-    if d.ndim != 1 or d.size == 0:
+    base, other = np.asarray(base, float), np.asarray(other, float)
+    if base.ndim != 1 or base.shape != other.shape or base.size == 0:
         raise ValueError(
-            f"base and other must be two equal-length 1-D sequences, got shape {d.shape}"
+            "base and other must be two equal-length 1-D sequences, "
+            f"got shapes {base.shape} and {other.shape}"
         )
+    d = other - base
     se = float(np.std(d, ddof=1) / np.sqrt(d.size)) if d.size > 1 else float("inf")
     mean, half = float(d.mean()), t_factor(d.size) * se
     word = "lower" if mean + half < 0 else "higher" if mean - half > 0 else "no change resolved"

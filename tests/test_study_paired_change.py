@@ -34,5 +34,5 @@ def test_paired_change_of_one_draw_resolves_nothing():
 
 
 def test_paired_change_refuses_unequal_lengths():
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="equal-length"):
         _common.paired_change([1.0, 2.0], [1.0, 2.0, 3.0])
