@@ -6,7 +6,8 @@ MoM in s-pol (TM, Sec. 4.3, as in the reference) and, beside it, p-pol (H along 
 partitions of 150 wavelengths, each lit by Thorsos tapered waves (g = 37.5 wavelengths) at 10, 30, 45, 60
 and 75 deg -- one LU per partition for all five -- and averaged incoherently with standard errors. The pBRDF
 is Eq. 177 (sigma = 0.3, PEC) in the specular plane, times cos(theta_s) (power per unit angle, like the MoM's
-coefficient). As in the figure both are normalised to their values at the specular angle. In
+coefficient). As in the figure both are normalised to their values at the specular angle (each curve's
+mean within 5 deg of it, ``specular_level``, since the MoM's single sample there is speckle). In
 absolute units the MoM scattering coefficient (integrating to 1) is compared with the
 1-D geometric-optics version of the same facet model (the pBRDF describes two-dimensional roughness, so its
 absolute F00 [1/sr] is not the 1-D surface's [1/rad]):
@@ -203,6 +204,38 @@ def jac_1d_over_2d(theta_i, theta_s):
     return np.cos(a) * np.cos(theta_i - a) / np.cos(theta_i)
 
 
+SPECULAR_WINDOW_DEG = 5.0
+
+
+def specular_level(theta_s, curve, theta_i, half_width_deg=SPECULAR_WINDOW_DEG):
+    """Mean of ``curve`` over the scattering angles within ``half_width_deg`` of the specular angle.
+
+    The curves are normalised by this level rather than by their one sample at the specular angle: a
+    Monte-Carlo MoM mean is speckle there as anywhere (one sample moved the normalised quick-mode curves by
+    about +-0.15 decades), and the window (21 samples at the 0.5 deg grid) averages several speckle cells at
+    small incidence. The model curves get the same window, so the normalisation stays like for like.
+
+    Parameters
+    ----------
+    theta_s : ndarray, shape (S,)
+        Scattering angles [rad].
+    curve : ndarray, shape (S,)
+        Values at ``theta_s``.
+    theta_i : float
+        Incidence angle [rad]; the specular direction is theta_s = theta_i.
+    half_width_deg : float
+        Half-width of the window [deg].
+
+    Returns
+    -------
+    float
+    """
+    near = np.abs(np.degrees(theta_s - theta_i)) <= half_width_deg * (
+        1 + 1e-9
+    )  # both grid ends, despite rounding
+    return float(np.mean(curve[near]))
+
+
 def _tail(theta_s, mom_n, ref_n):
     """Mean log10(ref / MoM) on the back-scatter side (theta_s < -20 deg) where both are > 0."""
     sel = (theta_s < np.radians(-20)) & (mom_n > 0) & (ref_n > 0)
@@ -288,20 +321,20 @@ def _panel(axes, res, coef, theta_s):
     for j, ti in enumerate(THETA_I):
         deg = int(round(np.degrees(ti)))
         mom, se = res.mean[j], res.stderr[j]
-        spec = np.argmin(np.abs(theta_s - ti))
         curves = model_curves(ti, theta_s)
         f00, go = curves["pbrdf"], curves["go1d"]
+        m0, p0 = specular_level(theta_s, mom, ti), specular_level(theta_s, f00, ti)
         c_pb, c_go, c_2d = lobe["pbrdf"][j], lobe["go1d"][j], lobe["shape2d"][j]
         color = f"C{j}"
-        axes[0].semilogy(np.degrees(theta_s), mom / mom[spec], color=color, label=f"MoM {deg} deg")
+        axes[0].semilogy(np.degrees(theta_s), mom / m0, color=color, label=f"MoM {deg} deg")
         axes[0].fill_between(
             np.degrees(theta_s),
-            np.maximum((mom - 2 * se) / mom[spec], 1e-6),
-            (mom + 2 * se) / mom[spec],
+            np.maximum((mom - 2 * se) / m0, 1e-6),
+            (mom + 2 * se) / m0,
             color=color,
             alpha=0.25,
         )
-        axes[0].semilogy(np.degrees(theta_s), f00 / f00[spec], "--", color=color)
+        axes[0].semilogy(np.degrees(theta_s), f00 / p0, "--", color=color)
         axes[1].plot(np.degrees(theta_s), mom, color=color, label=f"MoM {deg} deg")
         axes[1].plot(np.degrees(theta_s), go, "--", color=color)
         lobe_sel = (mom > 0.05 * lobe["height"][j]) & (go > 0)
@@ -316,18 +349,12 @@ def _panel(axes, res, coef, theta_s):
             "peak_height_mom": float(lobe["height"][j]),
             "peak_height_go1d": float(go.max()),
             "rms_log10_ratio_normalised_pbrdf": float(
-                np.sqrt(
-                    np.mean(
-                        np.log10((mom[lobe_sel] / mom[spec]) / (f00[lobe_sel] / f00[spec])) ** 2
-                    )
-                )
+                np.sqrt(np.mean(np.log10((mom[lobe_sel] / m0) / (f00[lobe_sel] / p0)) ** 2))
             ),
             "rms_log10_ratio_absolute_go1d": float(
                 np.sqrt(np.mean(np.log10(mom[lobe_sel] / go[lobe_sel]) ** 2))
             ),
-            "backscatter_tail_log10_pbrdf_over_mom": _tail(
-                theta_s, mom / mom[spec], f00 / f00[spec]
-            ),
+            "backscatter_tail_log10_pbrdf_over_mom": _tail(theta_s, mom / m0, f00 / p0),
             "energy_mean": float(res.energy[:, j].mean()),
             "max_relative_stderr_in_lobe": float(np.max((se / mom)[lobe_sel])),
         }
