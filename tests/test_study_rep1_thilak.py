@@ -50,10 +50,28 @@ def test_random_step2_is_compared_with_the_fixed_start_not_with_itself():
 
 
 def test_verdict_note_names_the_post_hoc_selection_and_our_estimator():
-    note = TT._verdict_note("partly", "box", 11, 6, two_step_reproduces=False)
+    # the verdict now rests on the closest procedure's rerun on fresh trials (test_study_thilak_verdict)
+    scored = dict.fromkeys(range(11))
+    fresh = {"factor": 1.3, "interval": {"low": 1.2, "high": 1.4}, "in_kind": "yes"}
+    note = TT._verdict_note(
+        "partly", "shown", "box", scored, fresh, True, two_step_reproduces=False
+    )
     assert '"partly"' in note and "after the fact" in note and "6 trials per row" in note
-    assert "11 candidates" in note
+    assert "11 candidates" in note and "fresh trials" in note
     assert "Our two-step estimator does not reproduce the tables" in note
     assert "does not reproduce" in TT._two_step_verdict_text(7, 14)
     assert "reproduces the tables: all 14" in TT._two_step_verdict_text(14, 14)
-    assert "does not reproduce them in kind" in TT._verdict_note("not reproduced", "b", 11, 6, 0)
+    ruled_out = TT._verdict_note(
+        "not reproduced", "ruled out", "b", scored, fresh | {"in_kind": "no"}, True, 0
+    )
+    assert "not even in kind" in ruled_out
+    open_ = TT._verdict_note(
+        "not reproduced",
+        "not determined",
+        "b",
+        scored,
+        fresh | {"in_kind": "not determined"},
+        True,
+        0,
+    )
+    assert "not determined at this run size" in open_ and "nothing is shown" in open_
