@@ -466,7 +466,7 @@ def run(ctx):
         f"{max(run_frac):.0%} of the trials run off to n > 10. The published means run off along "
         "the metal branch of the (n, kappa) valley (n and kappa both above the truth); ours along "
         "the dielectric branch (median kappa of the runaway trials "
-        + ", ".join(f"{r['thilak']['runaway_branch_kappa_median']:.2f}" for _, _, r in rows)
+        + ", ".join(_median_or_none(r["thilak"]["runaway_branch_kappa_median"]) for _, _, r in rows)
         + f"), so our median kappa is below the truth in {sum(a < 0 for a, _ in kbias)} of 7 "
         "cases where the text's mean is above it in all 7. "
         + _two_step_verdict_text(inside, len(cmp))
@@ -526,6 +526,11 @@ def run(ctx):
         f"{min(ratio_n):.1f}-{max(ratio_n):.1f} x published); 68 % coverage HPD "
         f"{min(hpd):.0%}-{max(hpd):.0%}, LR {min(lrc):.0%}-{max(lrc):.0%}",
     )
+
+
+def _median_or_none(value):
+    """A runaway median for the report: "none" where no trial ran away (the median of nothing is NaN)."""
+    return "none" if not np.isfinite(value) else f"{value:.2f}"
 
 
 def _two_step_verdict_text(inside, total):

@@ -159,3 +159,9 @@ def test_two_quick_seeds_give_the_same_verdict(tmp_path):
         assert "not determined at this run size" in report
         found.append((m["verdict"], m["in_kind"]))
     assert found[0] == found[1] == ("not reproduced", "not determined")
+
+
+def test_a_row_without_runaway_trials_prints_none_not_nan():
+    # the median of an empty set of runaway trials is NaN; the report printed it as "nan"
+    assert TT._median_or_none(float("nan")) == "none"
+    assert TT._median_or_none(0.123) == "0.12"
