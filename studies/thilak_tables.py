@@ -51,13 +51,18 @@ interval spans about 1.5x either way, so quick mode cannot decide: in 200 quick-
 pools the verdict was "not determined" in all 200 (the old argmax rule gave "partly" on 6 and "not
 reproduced" on 7 of 13 quick seeds). With 150 fresh trials the rerun decided "partly" in only 23 of
 40 draws (the rest "not determined"), hence 400 fresh trials in full mode (``FRESH_TRIALS``; the
-standard error then shrinks by about 0.6). Full mode is not re-measured after this change.
+standard error then shrinks by about 0.6). Full mode (29 Nov 2026, seed 20101210, ``--workers 2``, 206 s
+at load ~1): verdict "partly". The closest on the ranking trials is the box n <= 10 (1.21, 95 % 1.07-1.37;
+four more not told apart from it: lsqnonlin's defaults 1.28 and 1.24, the boxes n <= 5 and n <= 20 1.45 and
+1.35); on 400 fresh trials per row it scores 1.33 (95 % 1.26-1.41), n and kappa above copper in 7 of 7 rows,
+9 of 28 n and kappa numbers inside twice the combined standard error. Per candidate: yes 3, no 5, not
+determined 3 of 11.
 
 Run time: quick (24 trials per case, 6 per candidate procedure and row, 6 fresh) 10 s on the
 2-core machine when idle, 27-45 s beside another run; full (500/200 trials, 150 per candidate
-procedure and row, 400 fresh for the closest, with the adaptive-sampler check): 481 s at load 2-3
-before the fresh rerun (the candidate procedures take 296 s of it, fminsearch 79 s); the rerun adds
-about 30-80 s (a box over 7 rows takes 24-59 s for 300 trials).
+procedure and row, 400 fresh for the closest, with the adaptive-sampler check): 206 s with
+``--workers 2`` at load ~1 (the fresh rerun 22 s of it); serially 481 s at load 2-3 before the fresh rerun
+was added (the candidate procedures take 296 s of it, fminsearch 79 s).
 """
 
 import time
