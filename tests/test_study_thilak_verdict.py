@@ -31,12 +31,25 @@ def _signs(value=0, opposite=None):
 
 def test_in_kind_needs_the_whole_interval_on_one_side_of_the_threshold():
     assert TT.KIND_FACTOR == 1.5
-    assert TT.judge_in_kind(_interval(1.1, 1.4), _signs(0)) == "yes"
-    assert TT.judge_in_kind(_interval(1.1, 1.5), _signs(1)) == "yes"
-    assert TT.judge_in_kind(_interval(1.2, 1.8), _signs(1)) == "not determined"
-    assert TT.judge_in_kind(_interval(1.6, 2.4), _signs(1)) == "no"
+    many = TT.MIN_SIGN_TRIALS
+    assert TT.judge_in_kind(_interval(1.1, 1.5), _signs(1), many) == "yes"
+    assert TT.judge_in_kind(_interval(1.2, 1.8), _signs(1), many) == "not determined"
+    assert TT.judge_in_kind(_interval(1.6, 2.4), _signs(1), many) == "no"
     # one row biased opposite to the published direction rules a candidate out whatever its factor
-    assert TT.judge_in_kind(_interval(1.1, 1.4), _signs(1, opposite=("high", "3"))) == "no"
+    assert TT.judge_in_kind(_interval(1.1, 1.4), _signs(1, opposite=("high", "3")), many) == "no"
+
+
+def test_in_kind_needs_the_direction_shown_not_just_not_contradicted():
+    # review: "yes" with every row's direction undetermined called the bias's direction reproduced
+    assert TT.judge_in_kind(_interval(1.1, 1.4), _signs(0), TT.MIN_SIGN_TRIALS) == "not determined"
+
+
+def test_a_small_sample_cannot_rule_a_procedure_out_on_its_factor():
+    # with 6 trials per row the factor reads 1.16-1.34x high (the runaway trials that carry the means
+    # are missed) and its interval is centred there: the box n <= 20 read 2.25 (1.69-3.00) in quick
+    # mode against 1.35 from 150 trials, and was called "no"
+    assert TT.judge_in_kind(_interval(1.69, 3.0), _signs(0), 6) == "not determined"
+    assert TT.judge_in_kind(_interval(1.69, 3.0), _signs(0), TT.MIN_SIGN_TRIALS) == "no"
 
 
 def test_a_claim_needs_the_fresh_trials_and_a_rejection_every_candidate():
@@ -126,7 +139,9 @@ def _judge_many(f, trials, reps, seed):
         fi = TT.factor_interval(est)
         covered += fi["low"] <= f <= fi["high"]
         kinds.append(
-            TT.judge_in_kind(fi, TT.bias_signs({k: TT.row_stats(e) for k, e in est.items()}))
+            TT.judge_in_kind(
+                fi, TT.bias_signs({k: TT.row_stats(e) for k, e in est.items()}), trials
+            )
         )
     return covered / reps, {k: kinds.count(k) / reps for k in ("yes", "no", "not determined")}
 
@@ -134,14 +149,16 @@ def _judge_many(f, trials, reps, seed):
 def test_factor_interval_covers_a_known_factor_and_decides_only_when_it_can():
     # measured over 200 draws each (29 Nov 2026): coverage of f by the 95 % interval 0.94-1.00
     # (the jackknife of this median overstates its standard error by 1.2-1.4x); f = 1.3 at 6 trials
-    # per row "not determined" 0.95; f = 1.2 at 150 "yes" 1.00; f = 1.7 at 150 "no" 0.94.
+    # per row "not determined" 0.95; f = 1.7 at 150 "no" 0.94.
     # 100 draws: a binomial standard error of at most 0.05, so the bounds below are 2-3 of them
     # under the measured rates
     cover, kinds = _judge_many(1.3, 24, 100, seed=1)
     assert cover >= 0.88
     cover, kinds = _judge_many(1.3, 6, 100, seed=2)
     assert cover >= 0.85 and kinds["not determined"] >= 0.85
-    _, kinds = _judge_many(1.2, 150, 100, seed=3)
+    # "yes" needs every row's direction shown as well: at the fresh rerun's 400 trials per row it is
+    # (measured 1.00 at f = 1.2 and 1.3); at the ranking's 150 only 0.70, the rest "not determined"
+    _, kinds = _judge_many(1.2, TT.FRESH_TRIALS[False], 100, seed=3)
     assert kinds["yes"] >= 0.9
     _, kinds = _judge_many(1.7, 150, 100, seed=4)
     assert kinds["no"] >= 0.8 and kinds["yes"] == 0
