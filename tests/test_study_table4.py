@@ -44,8 +44,20 @@ def test_change_tally_counts_only_changes_beyond_their_interval():
             _res(12.9, [0.20, 0.21, 0.19, 0.20], [0.25, 0.26, 0.24, 0.25]), 12.9, sel
         ),
     ]
-    text = T4._change_tally(changes)
-    assert "better beyond the 95 % interval in 1 of 3 cases, worse in 1" in text
+    text = T4._change_tally({"aluminium": changes})
+    assert "better beyond its 95 % interval in 1 of 3, worse in 1" in text
     assert "within the noise in 1" in text
     # mean of -0.10, 0.00, +0.05
     assert "on average over the 3 cases -0.017" in text
+
+
+def test_change_tally_mean_averages_each_screen_over_the_cases_that_share_its_reference():
+    # the D/r0 of one repetition are scored against one no-turbulence classification, so their
+    # errors are correlated: the mean's error comes from the per-repetition means (here -0.10 on
+    # every screen: no scatter at all), not from the cases' own errors taken as independent
+    sel = np.ones(10**6, bool)
+    a = T4._paired_change(_res(7.9, [0.30, 0.40, 0.30, 0.40], [0.18, 0.32, 0.18, 0.32]), 7.9, sel)
+    b = T4._paired_change(_res(12.9, [0.30, 0.40, 0.30, 0.40], [0.22, 0.28, 0.22, 0.28]), 12.9, sel)
+    # per screen: (-0.12 - 0.08) / 2 = -0.10 and (-0.08 - 0.12) / 2 = -0.10
+    text = T4._change_tally({"steel": [a, b]})
+    assert "on average over the 2 cases -0.100 +/- 0.000 (95 %; better)" in text
