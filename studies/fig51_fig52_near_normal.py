@@ -246,9 +246,11 @@ def dolp_text(metrics, plates):
         "At 24 deg the paint's median no-turbulence DOLP is "
         + ", ".join(f"{pm(metrics[p]['paint_dolp_no_turbulence'])} ({p})" for p in plates)
         + ", below the Ch. V priors' threshold of 0.30 (dielectric prior 0.65 +/- 0.32): the limitation of "
-        "Figs. 51i and 52i. After the EM with those priors the paint's median DOLP is "
+        "Figs. 51i and 52i. In the corrected image (the blind EM's maximum-likelihood Stokes images, which the "
+        "priors do not shape: they only classify them) the paint's median DOLP is "
         + ", ".join(f"{pm(metrics[p]['paint_dolp_corrected'])} ({p})" for p in plates)
-        + ", so two-means on the corrected DOLP histogram (first realization's centres on the "
+        + " (lowered by the turbulence and the blind PSF's errors, not by the priors), so two-means on the "
+        "corrected DOLP histogram (first realization's centres on the "
         f"{plates[0]} plate: {', '.join(f'{c:.3f}' for c in al['adaptive_centres_first_draw'])}) has little "
         "paint left to find. The figure shows the first realization; every number here is over all of them."
     )
