@@ -34,8 +34,11 @@ S0 relative RMSE away from the edges / DOLP RMSE, means over the acquisitions, a
 The time grows as K (3.0x at K = 3). The S0 error away from the edges falls by 8-23 % with more starts, but by
 less than a first run of this study on 3 acquisitions per D/r0 claimed (18-31 % at K = 3, 28 Nov 2026), and
 at K = 3 the fall is resolved only at D/r0 12.9 (-0.029 +- 0.025, 8 %); at 7.9 it is -0.041 +- 0.049. The
-DOLP error does not fall: it is unchanged at 7.9 (-0.001 +- 0.008) and slightly higher at 12.9 (+0.007 +-
-0.007 at K = 3, +0.011 +- 0.009 at K = 6). The ghosts are mostly in S0, and the DOLP's error is mostly what
+DOLP error does not fall: it is unchanged at 7.9 (-0.001 +- 0.008) and at 12.9 higher by an amount at the
+edge of its interval (+0.007 +- 0.007 at K = 3, +0.011 +- 0.009 at K = 6). All 18 acquisitions of a D/r0
+share one plate layout (the scene's draw) and, per geometry, one no-turbulence reference for the
+registration; the intervals are over the screens and noise, so they hold for this plate, not over plates.
+The ghosts are mostly in S0, and the DOLP's error is mostly what
 one blind PSF cannot undo at all. So the main job's default of three starts buys a small, partly resolved
 S0 gain at three times the restoration time, and no DOLP gain.
 """
