@@ -1280,6 +1280,7 @@ def _fmt_points(mask, cell_list, theta_i):
 
 
 def _pm(value, se, signed=False):
+    value = 0.0 if abs(value) < 5e-4 else value  # no "-0.000" (NaN stays NaN)
     return f"{value:+.3f} +- {se:.3f}" if signed else f"{value:.3f} +- {se:.3f}"
 
 
@@ -1321,7 +1322,7 @@ def _report(ctx, summary, bias, cover, energy, cell_list, theta_i, iron_check, t
     m = ctx.metrics
     deg = np.degrees(theta_i)
     ctx.say(
-        f"{len(cell_list)} cells (slope, sigma_h/lambda), "
+        f"{len(cell_list)} cell{'' if len(cell_list) == 1 else 's'} (slope, sigma_h/lambda), "
         f"{m['realizations_per_cell_dielectrics']} realization(s) for glass and paint, "
         f"{m['realizations_per_cell_metals_and_pec']} for iron, aluminium and the PEC, of "
         f"{m['surface_length_wavelengths']:.0f} wavelengths each, incidence "

@@ -1329,7 +1329,9 @@ def _procedure_text(best, scored, fresh, state, quick):
         "from its bias and spread; the factor's 95 % interval is a jackknife over the trials with "
         "Student's t). Typical factor ours/published of the means and RMSEs of n "
         "and kappa, by family: "
-        + "; ".join(f"{k} {min(v):.2f}-{max(v):.2f}" for k, v in fam.items())
+        + "; ".join(
+            f"{k} {min(v):.2f}" + ("" if len(v) == 1 else f"-{max(v):.2f}") for k, v in fam.items()
+        )
         + f". The closest is '{best}' (factor {s['factor']:.2f}, 95 % {i['low']:.2f}-{i['high']:.2f}), "
         "picked after the fact on these trials; "
         + (

@@ -216,8 +216,8 @@ def run(ctx):
             + (
                 ""
                 if r["starts"] == 1
-                else f" (change {_change(r['change_vs_one_start'][names[0]])} / "
-                f"{_change(r['change_vs_one_start'][names[1]])})"
+                else f" [change {_change(r['change_vs_one_start'][names[0]])} / "
+                f"{_change(r['change_vs_one_start'][names[1]])}]"
             )
             for r in sub
         )
@@ -249,5 +249,5 @@ def run(ctx):
 
 
 def _change(c):
-    """``+0.003 +- 0.016 (no change resolved)`` from a :func:`paired_change` result."""
-    return f"{c['mean']:+.3f} +- {c['half_width']:.3f} ({c['word']})"
+    """``+0.003 +- 0.016, no change resolved`` from a :func:`paired_change` result."""
+    return f"{c['mean']:+.3f} +- {c['half_width']:.3f}, {c['word']}"

@@ -186,7 +186,7 @@ def run(ctx):
     ctx.save_figure(fig, "perf_self_calibration")
     ctx.say(
         f"Uncorrected, the blindly restored paint's region-mean DOLP is {raw.mean():+.2f} off the truth "
-        f"(relative, mean over {n_scenes} scenes and the geometries). Corrected: "
+        f"(relative, mean over {n_scenes} scene{'' if n_scenes == 1 else 's'} and the geometries). Corrected: "
         + "; ".join(
             f"{r['bootstrap']}: mean {r['mean_rel_error']:+.3f}, rms {r['rms_rel_error']:.3f}, "
             f"rms z {r['rms_z']:.2f}, {r['time_s']:.1f} s (x{r['time_vs_baseline']:.2f} the baseline's time)"
@@ -203,7 +203,8 @@ def run(ctx):
     against = paired_change(scene_rms(base["bootstrap"]), scene_rms(ref["bootstrap"]))
     ctx.metrics["default_vs_baseline_rms_change"] = against
     ctx.say(
-        f"Each row rests on {ref['residuals']} residuals ({n_scenes} scene(s) x {len(scenes[0]['raw'])} "
+        f"Each row rests on {ref['residuals']} residuals ({n_scenes} scene{'' if n_scenes == 1 else 's'} x "
+        f"{len(scenes[0]['raw'])} "
         "geometries). Even independent residuals leave an rms z a relative standard error of 1/sqrt(2N) = "
         f"{ref['rms_z_relative_se_independent']:.2f}; the geometries of one scene share its reference plate, "
         + (
