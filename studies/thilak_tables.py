@@ -59,7 +59,8 @@ at load ~1): verdict "partly". The closest on the ranking trials is the box n <=
 four more not told apart from it: lsqnonlin's defaults 1.28 and 1.24, the boxes n <= 5 and n <= 20 1.45 and
 1.35); on 400 fresh trials per row it scores 1.33 (95 % 1.26-1.41), n and kappa above copper in 7 of 7 rows,
 9 of 28 n and kappa numbers inside twice the combined standard error. Per candidate: yes 3, no 5, not
-determined 3 of 11.
+determined 3 of 11; with "yes" requiring every row's direction shown (re-run serially, 269 s): yes 1, no 5,
+not determined 5, the same closest candidate, fresh score and verdict.
 
 Run time: quick (24 trials per case, 6 per candidate procedure and row, 6 fresh) 10 s on the
 2-core machine when idle, 27-45 s beside another run; full (500/200 trials, 150 per candidate
