@@ -114,8 +114,8 @@ def test_adaptive_within_noise_of_the_fixed_priors_is_not_claimed():
 
 
 def test_adaptive_within_noise_of_the_all_paint_map_is_not_claimed():
-    adaptive = [0.20, 0.35, 0.25, 0.30]  # 0.275 +/- 0.10 against 0.27: neither better nor worse
-    m = {p: _plate([1.0] * 4, [0.73] * 4, adaptive, [0.27] * 4) for p in ("aluminium", "steel")}
+    adaptive = [0.20, 0.35, 0.25, 0.30] * 3  # 0.275 +/- 0.03 against 0.27: neither better nor worse
+    m = {p: _plate([1.0] * 12, [0.73] * 12, adaptive, [0.27] * 12) for p in ("aluminium", "steel")}
     verdict, headline, text = F51.adaptive_verdict(m)
     assert "all-paint map on 0/2" in headline
     assert "worse than no classification" not in text
@@ -125,7 +125,7 @@ def test_adaptive_within_noise_of_the_all_paint_map_is_not_claimed():
 
 def test_adaptive_working_without_the_limitation_is_partly():
     m = {
-        p: _plate([0.1] * 4, [0.73, 0.72, 0.74, 0.73], [0.1, 0.12, 0.11, 0.1], [0.27] * 4)
+        p: _plate([0.1] * 12, [0.73, 0.72, 0.74, 0.73] * 3, [0.1, 0.12, 0.11, 0.1] * 3, [0.27] * 12)
         for p in ("a", "b")
     }
     verdict, headline, _ = F51.adaptive_verdict(m)
@@ -196,3 +196,16 @@ def test_quick_report_states_its_uncertainty(tmp_path):
         r for r in text.splitlines() if r.startswith("| aluminium |") or r.startswith("| steel |")
     ]
     assert rows and all("+/-" in r for r in rows)
+
+
+def test_most_draws_is_an_exact_binomial_interval_on_the_draws_that_call_the_paint_metal():
+    # the bistable share: a t interval of its mean ran past 1 (0.93 +/- 0.10) or shrank to zero width
+    above, n, low, high, word = F51.most_draws([1.0] * 22 + [0.1, 0.2])
+    ci = stats.binomtest(22, 24).proportion_ci(confidence_level=0.95, method="exact")
+    assert (above, n) == (22, 24) and (low, high) == pytest.approx((ci.low, ci.high))
+    assert word == "higher" and 0 <= low < high <= 1
+    assert F51.most_draws([1.0] * 24)[3] == 1.0  # all draws: the interval reaches 1, not past it
+    # 4 of 4 cannot show "most draws": the exact interval's lower end is 0.40
+    assert F51.most_draws([1.0] * 4)[4] == "no change resolved"
+    assert F51.most_draws([0.1] * 12)[4] == "lower"
+    assert F51.most_draws(ESCAPES_5)[4] == "no change resolved"  # 7 of 12
