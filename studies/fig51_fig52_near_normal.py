@@ -20,13 +20,25 @@ plate: in 31 of 312 draws (13 seeds x 24) it called under half of the paint meta
 better than the adaptive priors (on seed 1's layout in 5 of 12 draws). With one draw a seed survey of 13
 seeds found the verdict "not reproduced" on seed 1 and "partly" on 12; with 24 draws it is "partly" on all 13
 (limitation shown; adaptive minus all-paint error +0.21..+0.28, each +/- <= 0.02, worse on both plates on
-every seed). Adaptive minus fixed on the aluminium plate is -0.14 over all 312 draws (sd 0.16), about 2 to 3
+every seed), measured with the limitation judged on a t interval of the mean share; with the count of draws
+checked on three of those seeds (20101210, 1, 6: aluminium 22, 21 and 19 of 24, steel 24 of 24), the same.
+Adaptive minus fixed on the aluminium plate is -0.14 over all 312 draws (sd 0.16), about 2 to 3
 of a 24-draw run's standard errors: resolved on 11 of the 13 seeds, within the noise on 2 (-0.080 +/- 0.094,
 -0.087 +/- 0.088), and the report says which. The figure shows the first realization.
 
+Full mode gives the opposite picture (29 Nov 2026, seed 20101210, 12 draws, ``--workers 2``): verdict "not
+reproduced". With the text's 250 EM iterations at 128 px the fixed Ch. V priors classify the aluminium plate
+at 0.042 +/- 0.009 total error and call 0.017 +/- 0.007 of its paint metal, in 0 of 12 draws more than half
+(limitation NOT shown); on steel 4 of 12 draws (95 % 0.10-0.65: not determined; total error 0.32 +/- 0.21,
+bistable). The adaptive priors are worse than the fixed ones on aluminium (+0.284 +/- 0.037) and worse than
+calling every pixel paint on both plates (+0.091 +/- 0.035, +0.242 +/- 0.023). So the quick mode's "partly"
+(48 px, 40 iterations) is a property of the short EM: run as long as the text's, the fixed priors overcome
+the paint's low DOLP (0.239, under their threshold of 0.30) on aluminium, and the limitation of Figs. 51i and
+52i is not reproduced by this simulation.
+
 Run time on the shared 2-core machine (29 Nov 2026): quick (48 px, 40 iterations, 24 draws) 16 s alone,
-33-67 s at a load average of 5-7; full (128 px, 250 iterations, 12 draws) about 200 s (estimated from the
-single-draw full run's 32 s for twice the EM runs of one draw, not measured).
+33-67 s at a load average of 5-7; full (128 px, 250 iterations, 12 draws) 138 s with ``--workers 2`` at
+load ~1.
 """
 
 import numpy as np
