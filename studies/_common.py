@@ -201,9 +201,7 @@ def mueller_figure_study(ctx, eta, sigma, label, published_fit, literature_name)
     )
 
 
-def plate_observations(
-    ctx, theta_deg, d_over_r0, *, priors, iterations, size, reps=1, adaptive=False, plates=None
-):
+def plate_observations(ctx, theta_deg, d_over_r0, *, priors, iterations, size, reps=1, plates=None):
     """Simulated painted plates (Figs. 47-61) at one specular geometry, through turbulence,
     corrected by the EM with ``priors`` and registered: {plate name: [observation per repetition]}.
 
@@ -211,13 +209,11 @@ def plate_observations(
     :func:`scatterlab.characterization.pipeline.observe`: ``no_turbulence/degraded`` is the reference
     (the no-turbulence image restored with its known PSF, classified by the priors' DOLP thresholds as
     in Ch. V); per D/r0, ``degraded`` (thresholds) and ``corrected`` (EM, the priors' continuation).
-    With ``adaptive`` (Sec. 8.1.1) the priors are re-centred on the histogram of the corrected ML DOLP
-    and the corrected image is classified by their thresholds.
     """
     from scatterlab.characterization import SceneConfig
     from scatterlab.characterization.pipeline import observe
     from scatterlab.characterization.scene_config import Plate
-    from scatterlab.deconvolution import adaptive_priors, classify_dolp
+    from scatterlab.deconvolution import classify_dolp
     from scatterlab.imaging import painted_plate
 
     def as_dict(o):
@@ -231,11 +227,7 @@ def plate_observations(
             if case == "no_turbulence":
                 continue
             img = o.images[(case, kind)]
-            cls, pri = img.classes, priors
-            if adaptive and kind == "corrected":
-                pri = adaptive_priors(np.nan_to_num(img.dolp), base=priors)
-                cls = classify_dolp(np.nan_to_num(img.dolp), pri)
-            out.setdefault(case, {})[kind] = _image(img, cls, pri)
+            out.setdefault(case, {})[kind] = _image(img, img.classes, priors)
         return out
 
     plates = plates or [Plate(), Plate("steel", 3.60, 5.88)]

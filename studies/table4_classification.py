@@ -44,7 +44,13 @@ instead of the purest fifth, steel's degraded totals were 0.21 / 0.35 / 0.37.)
 """
 
 import numpy as np
-from scatterlab.studies._common import compare, plate_observations, set_verdict, t_factor
+from scatterlab.studies._common import (
+    compare,
+    paired_change,
+    plate_observations,
+    set_verdict,
+    t_factor,
+)
 
 from scatterlab.characterization.pipeline import interior
 from scatterlab.characterization.reference_tables import TABLE4
@@ -219,16 +225,15 @@ def _paired_change(res, x, sel):
         ``factor``, the 95 % coverage factor (Student t over the screens; 2 for one screen's binomial error).
     """
     deg, cor = res[f"D_r0_{x:g}_degraded"], res[f"D_r0_{x:g}_corrected"]
-    diff = np.subtract(cor["per_screen_total"], deg["per_screen_total"])
+    c = paired_change(deg["per_screen_total"], cor["per_screen_total"])
     binom = np.hypot(_binomial_u(deg["total_error"], sel), _binomial_u(cor["total_error"], sel))
-    se = np.std(diff, ddof=1) / np.sqrt(diff.size) if diff.size > 1 else 0.0
-    factor = t_factor(diff.size) if diff.size > 1 else 2.0
+    several = len(deg["per_screen_total"]) > 1
     return {
         "d_r0": x,
-        "change": float(diff.mean()),
-        "se": float(max(se, binom)),
-        "factor": factor,
-        "per_screen": diff.tolist(),
+        "change": c["mean"],
+        "se": float(max(c["se"] if several else 0.0, binom)),
+        "factor": c["half_width"] / c["se"] if several else 2.0,
+        "per_screen": np.subtract(cor["per_screen_total"], deg["per_screen_total"]).tolist(),
     }
 
 
