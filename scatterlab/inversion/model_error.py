@@ -52,7 +52,8 @@ heights instead of their largest value (the table's ``error_rms``) under-covers:
 pooled, iron 38 / 56 %.
 
 The table (``scatterlab/data/model_error/dolp_mom.npz``) is written by the study
-``studies/dolp_vs_mom.py`` (function ``model_error_table``): incoherent averages over realizations
+``studies/dolp_vs_mom.py`` (function ``model_error_table``; ``export_from_runs`` regenerates it, and
+the tests' held-out DOLP, from a full run's saved ``mom_runs.npz``): incoherent averages over realizations
 of 1-D Gaussian rough surfaces (exact two-medium MoM for glass 1.5 and paint 1.39 - j0.34, the
 impedance condition for iron 3.60 - j5.88 and aluminium 1.44 - j16), both polarizations, the exact
 DOLP :math:`(\sigma_s - \sigma_p)/(\sigma_s + \sigma_p)` against the inversion's forward model
