@@ -272,11 +272,20 @@ def _count(c):
     return f"{above} of {n} draw{'' if n == 1 else 's'} (95 % {low:.2f}-{high:.2f})"
 
 
-def pm(values, digits=3):
-    """``values`` as "mean +/- 95 % half-width" over the realizations (a scalar as itself)."""
+def pm(values, digits=3, bounds=(0.0, 1.0)):
+    """``values`` as "mean +/- 95 % half-width" over the realizations (a scalar as itself).
+
+    Every score here is a fraction (of pixels, or a DOLP), so where the Student t interval reaches
+    past ``bounds`` it is shown as the range it leaves inside them, "mean (95 % lo-hi)", instead of a
+    half-width that would claim values no draw can take (1.03 for a share of pixels).
+    """
     mean, half, _ = versus(values, 0.0)
     if np.ndim(values) == 0:
         return f"{mean:.{digits}f}"
+    lo, hi = mean - half, mean + half
+    if lo < bounds[0] or hi > bounds[1]:
+        lo, hi = max(lo, bounds[0]), min(hi, bounds[1])
+        return f"{mean:.{digits}f} (95 % {lo:.{digits}f}-{hi:.{digits}f})"
     return f"{mean:.{digits}f} +/- {half:.{digits}f}"
 
 
@@ -285,7 +294,7 @@ def error_table(metrics, plates):
     n = metrics.get("realizations", 1)
     lines = [
         f"Mean over {n} independent realizations (layout, turbulence, noise) +/- the 95 % Student t "
-        "half-width of the mean:",
+        "half-width of the mean (shown as the range inside 0-1 where it reaches past them):",
         "",
         "| plate | classification | total error vs true labels | paint called metal | metal called paint |",
         "|---|---|---|---|---|",

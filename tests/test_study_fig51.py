@@ -209,3 +209,14 @@ def test_most_draws_is_an_exact_binomial_interval_on_the_draws_that_call_the_pai
     assert F51.most_draws([1.0] * 4)[4] == "no change resolved"
     assert F51.most_draws([0.1] * 12)[4] == "lower"
     assert F51.most_draws(ESCAPES_5)[4] == "no change resolved"  # 7 of 12
+
+
+def test_shares_whose_interval_reaches_past_one_are_shown_as_the_range_inside_it():
+    """A share of pixels is in [0, 1]: 23 draws at 1 and one at 0 give a mean of 0.958 whose Student t
+    half-width (0.086) reaches past 1, so the table shows the range cut at 1, not "+/- 0.086"."""
+    values = np.r_[np.ones(23), 0.0]
+    half = stats.t.ppf(0.975, 23) * np.std(values, ddof=1) / np.sqrt(24)
+    assert F51.pm(values) == f"0.958 (95 % {0.958333 - half:.3f}-1.000)"
+    inside = np.array([0.2, 0.3, 0.25, 0.35])
+    h = stats.t.ppf(0.975, 3) * np.std(inside, ddof=1) / 2
+    assert F51.pm(inside) == f"0.275 +/- {h:.3f}"
