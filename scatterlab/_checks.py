@@ -116,6 +116,70 @@ def as_angle(theta, name: str = "theta", lo: float = 0.0, hi: float = np.pi / 2)
     return arr
 
 
+def as_rng(rng, name: str = "rng") -> np.random.Generator:
+    """A numpy Generator from what every ``rng`` argument of the package accepts.
+
+    Parameters
+    ----------
+    rng : None, int >= 0, sequence of int >= 0, numpy.random.SeedSequence, BitGenerator or Generator
+        None draws fresh entropy (not reproducible); a Generator is used as it is (shared state).
+    name : str
+        Argument name used in the error message.
+
+    Returns
+    -------
+    numpy.random.Generator
+    """
+    if isinstance(rng, np.random.Generator):
+        return rng
+    allowed = (
+        f"{name} must be None, a non-negative integer (a seed), a sequence of them, a "
+        "numpy.random.SeedSequence, BitGenerator or Generator"
+    )
+    ok = rng is None or isinstance(rng, (np.random.SeedSequence, np.random.BitGenerator))
+    if not ok:
+        seeds = np.asarray(rng, dtype=object).ravel() if not isinstance(rng, (str, bytes)) else None
+        ok = (
+            seeds is not None
+            and seeds.size > 0
+            and all(isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_)) for v in seeds)
+        )
+        if ok and any(int(v) < 0 for v in seeds):
+            raise ValueError(f"{allowed}; got a negative seed {rng!r}")
+    if not ok:
+        raise ValueError(f"{allowed}; got {rng!r}")
+    return np.random.default_rng(rng)
+
+
+def as_azimuth(phi, name: str = "phi") -> np.ndarray:
+    """Validate azimuths in radians within ``[-2 pi, 2 pi]``.
+
+    An azimuth is periodic, but one beyond a full turn is almost always given in degrees (``phi =
+    180`` for the specular plane), which would otherwise be read silently as 180 rad.
+
+    Parameters
+    ----------
+    phi : array_like
+        Azimuths [rad], any shape.
+    name : str
+        Argument name used in the error message.
+
+    Returns
+    -------
+    ndarray of float
+        ``phi`` [rad], same shape.
+    """
+    arr = as_finite(phi, name)
+    turn = 2 * np.pi * (1 + 1e-12)
+    if np.any(np.abs(arr) > turn):
+        worst = float(arr.flat[int(np.argmax(np.abs(arr)))])
+        raise ValueError(
+            f"{name} must be in [-2 pi, 2 pi] rad (got {worst:g}: degrees? use numpy.radians; the specular "
+            f"plane is {name} = pi)"
+        )
+    return arr
+
+
 def as_positive(value, name: str, *, allow_zero: bool = False) -> np.ndarray:
     """Validate a strictly positive (or non-negative) finite real array.
 

@@ -291,3 +291,51 @@ def test_depolarization_index_is_the_same_at_any_scale(scale):
         warnings.simplefilter("error")
         assert depolarization_index(scale * np.diag([1.0, 0.5, 0.5, 0.5])) == pytest.approx(0.5)
         assert depolarization_index(scale * np.eye(4)) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("phi", [180.0, -7.0, [np.pi, 180.0]])
+def test_an_azimuth_in_degrees_is_refused_everywhere_it_is_taken(phi):
+    """phi = 180 (the specular plane in degrees) used to be read as 180 rad: a wrong fit, no error."""
+    from scatterlab.inversion import DolpForward
+    from scatterlab.pbrdf import Model
+
+    th = np.radians([30.0, 40.0])
+    for call in (
+        lambda: fit_dolp(model_dolp(1.39, 0.34, 0.3, th, th), th, th, phi=phi),
+        lambda: model_dolp(1.39, 0.34, 0.3, th, th, phi=phi),
+        lambda: DolpForward(th, th, phi),
+        lambda: Model(0.3).mueller(1.5, th, th, phi),
+    ):
+        with pytest.raises(ValueError, match=r"phi must be in \[-2 pi, 2 pi\] rad .*degrees"):
+            call()
+
+
+def test_an_azimuth_within_a_turn_either_way_is_the_same_geometry():
+    """-2 pi, 0 and 2 pi (and pi and -pi) are accepted and give the same Mueller matrix."""
+    from scatterlab.pbrdf import Model
+
+    m = Model(0.3)
+    np.testing.assert_allclose(
+        m.mueller(1.5, 0.5, 0.6, -2 * np.pi), m.mueller(1.5, 0.5, 0.6, 2 * np.pi), atol=1e-15
+    )
+    np.testing.assert_allclose(
+        m.mueller(1.5, 0.5, 0.6, -np.pi), m.mueller(1.5, 0.5, 0.6, np.pi), atol=1e-15
+    )
+
+
+@pytest.mark.parametrize("bad", [1.5, "abc", -1, True, [1, -2], [], [1.5]])
+def test_an_rng_given_wrongly_is_refused_by_name(bad):
+    from scatterlab._checks import as_rng
+
+    with pytest.raises(ValueError, match="rng must be None, a non-negative integer"):
+        as_rng(bad)
+
+
+def test_every_accepted_rng_form_gives_a_reproducible_generator():
+    from scatterlab._checks import as_rng
+
+    g = np.random.default_rng(7)
+    assert as_rng(g) is g  # shared state, not a copy
+    for form in (7, np.int64(7), [7], np.random.SeedSequence(7), np.random.PCG64(7)):
+        assert as_rng(form).integers(1 << 30) == np.random.default_rng(7).integers(1 << 30)
+    assert isinstance(as_rng(None), np.random.Generator)

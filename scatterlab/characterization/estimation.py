@@ -350,6 +350,15 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
             "than the error it carries (a restoration or classification error the self-calibration did "
             "not measure)"
         )
+    from scatterlab.inversion.posterior import FIT_P_MIN
+
+    fit = s.get("goodness_of_fit")
+    if fit is not None and fit["p_value"] < FIT_P_MIN:
+        notes.append(
+            f"**this region's DOLP does not fit the model within the errors it carries** (chi-square "
+            f"{fit['chi2']:.1f} for {fit['dof']} degrees of freedom, p = {fit['p_value']:.1e}): an error "
+            "the error model lacks, so the interval is too narrow"
+        )
     diag = s.get("diagnostics", {})
     converged = bool(diag.get("converged", True))
     if not converged:

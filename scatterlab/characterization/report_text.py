@@ -356,13 +356,14 @@ def report_markdown(cfg, results, checks, *, seconds, ideal) -> str:
             f"{len(checks) - failed} of {len(checks)} checks pass"
             + (":" if not failed else f"; **{failed} fail**:"),
             "",
-            "The checks are issue 14's numbers. A calibrated 68 % interval misses its truth one time in "
+            "The checks are the accuracy this scene is held to (docs/characterization_accuracy.md). A "
+            "calibrated 68 % interval misses its truth one time in "
             "three, so the paint's no-turbulence intervals and the joint regions are not checked one by "
             "one (the posterior tables say whether each covers): they are checked together, for more "
             "misses than calibrated statements would give. The binomial chance counts them as "
             "independent; the statements of one posterior (its n, its kappa, its joint region) tend to "
             "miss together, which makes many misses likelier than that chance says, so the check errs "
-            "toward failing. The metal's 68 % intervals are checked one by one, as issue 14 asks (the "
+            "toward failing. The metal's 68 % intervals are checked one by one (the "
             "truth within one half-width of the posterior).",
             "",
             "| check | value | result |",
@@ -567,7 +568,8 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
                 continue
             c = post.get(q, {}).get("contraction")
             weak = c is not None and c < DETERMINED_CONTRACTION
-            (ridge if weak else determined).append(f"{res.plate.metal}'s {q}")
+            flag = "" if post.get("converged", True) else ", its posterior not converged"
+            (ridge if weak else determined).append(f"{res.plate.metal}'s {q}{flag}")
     if ridge:
         notes.append(
             f"- **{len(ridge)} of the metals' marginal 68 % intervals miss the truth where the data "
@@ -581,7 +583,8 @@ def _failure_notes(results, checks, ideal, estimate="blind") -> list:
             f"- **{len(determined)} of the metals' marginal 68 % intervals miss the truth where the data "
             f"do determine the parameter ({', '.join(determined)}; posterior contraction at least "
             f"{DETERMINED_CONTRACTION:g}).** This is not the ridge: the interval is narrower than the "
-            "errors left in the data, or a 68 % interval missing as it will one time in three. The "
+            "errors left in the data, or a 68 % interval missing as it will one time in three, or, where "
+            "the posterior is marked not converged, a chain too short to place it. The "
             "posterior table says whether the joint region covers; the coverage study "
             "(`studies/characterization_coverage.py`) measures the calibration over many seeds."
         )

@@ -28,6 +28,7 @@ from scatterlab.inversion.least_squares import (
 from scatterlab.inversion.model_error import dolp_model_error, dolp_model_error_covariance
 from scatterlab.inversion.posterior import (
     ConvergenceWarning,
+    MisfitWarning,
     Posterior,
     PriorOptions,
     SamplerOptions,
@@ -58,6 +59,7 @@ __all__ = [
     "PriorOptions",
     "SamplerOptions",
     "ConvergenceWarning",
+    "MisfitWarning",
     "local_minima",
     "split_rhat",
     "ensemble_rhat",

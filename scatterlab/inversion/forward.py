@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from scatterlab._checks import as_angle
+from scatterlab._checks import as_angle, as_azimuth
 from scatterlab.fresnel import smooth_dolp
 from scatterlab.pbrdf import Model, facet_dolp, shadowing_strategy
 from scatterlab.pbrdf.geometry import facet_geometry, polar_cos
@@ -59,7 +59,7 @@ class DolpForward:
     def __init__(self, theta_i, theta_r, phi=np.pi, *, sigma=None, **model_kw):
         ti = as_angle(theta_i, "theta_i").ravel()
         tr = as_angle(theta_r, "theta_r").ravel()
-        ph = np.broadcast_to(np.asarray(phi, float), ti.shape).astype(float)
+        ph = np.broadcast_to(as_azimuth(phi, "phi"), ti.shape).astype(float)
         if ti.shape != tr.shape:
             raise ValueError("theta_i and theta_r must have one entry per measured geometry")
         self.theta_i, self.theta_r, self.phi = ti, tr, ph

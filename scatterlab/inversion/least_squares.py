@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import as_angle, as_positive, check_starts
+from scatterlab._checks import as_angle, as_azimuth, as_positive, check_starts
 from scatterlab.inversion.design import inverse_information
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.inversion.options import DEFAULT_STARTS, FitOptions, resolve_options
@@ -200,8 +200,7 @@ def prepare_data(dolp, theta_i, theta_r, phi=np.pi, *, margin: float = DOLP_MARG
         raise ValueError(f"phi must be a float or one value per geometry ({ti.size})") from exc
     if ti.shape != tr.shape:
         raise ValueError("theta_i and theta_r must have one entry per measured geometry")
-    if not np.all(np.isfinite(ph)):
-        raise ValueError("phi must be finite [rad]")
+    as_azimuth(ph, "phi")
     if y.shape[-1:] != ti.shape:
         raise ValueError(
             f"dolp must have shape (..., {ti.size}) (one value per geometry), got {y.shape}"

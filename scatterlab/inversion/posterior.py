@@ -125,12 +125,23 @@ __all__ = [
     "effective_sample_size",
     "local_minima",
     "MOVES",
+    "MisfitWarning",
+    "FIT_P_MIN",
 ]
 
 PARAMETERS = ("n", "kappa", "sigma")
 KAPPA_FLOOR = 1e-3  # lower end of the log-uniform kappa prior
 RHAT_MAX = 1.01  # between-ensemble R-hat above which the ensembles disagree (Vehtari et al. 2021)
 ACCEPTANCE = (0.15, 0.7)  # acceptance fractions outside this range mean a poorly tuned proposal
+
+
+FIT_P_MIN = 1e-3  # chi-square p-value below which the data misfit the model and its stated errors
+
+
+class MisfitWarning(UserWarning):
+    """The best fit's chi-square is improbable under the stated DOLP errors (p < :data:`FIT_P_MIN`):
+    the errors are understated, the geometry is wrong (angles in other units, a wrong azimuth), or the
+    model lacks an error term, and the intervals, which assume the stated errors, are too narrow."""
 
 
 class ConvergenceWarning(UserWarning):
@@ -449,6 +460,34 @@ class DolpLogPosterior:
             u = np.sum(r * self.c / v, -1)
             out = out - u**2 / (1 + g) + np.log1p(g)
         return -0.5 * out
+
+    def chi2(self, f) -> np.ndarray:
+        """Chi-square (W,) of model DOLP ``f`` (W, M) under the known error model (the Mahalanobis
+        norm of the residual; no normalisation terms). Only for a known error model.
+
+        Parameters
+        ----------
+        f : ndarray, shape (W, M)
+
+        Returns
+        -------
+        ndarray, shape (W,)
+        """
+        from scipy.linalg import solve_triangular
+
+        if self.infers_noise:
+            raise ValueError(
+                "chi2 needs a known error model (noise or covariance), not an inferred noise"
+            )
+        r = f[:, self.index] - self.y
+        if self.chol is not None:
+            z = solve_triangular(self.chol, r.T, lower=True)
+            return np.sum(z * z, 0)
+        out = np.sum(r * r / self.var, -1)
+        if self.c is not None:
+            g = np.sum(self.c**2 / self.var)
+            out = out - np.sum(r * self.c / self.var, -1) ** 2 / (1 + g)
+        return out
 
     def __call__(self, x):
         x = np.atleast_2d(x)
@@ -1164,6 +1203,8 @@ class Posterior:
     noise_bounds : (low, high) or None -- prior range of the inferred noise (None when it was not
     inferred).
     correlated : ndarray (M,) or None -- the error shared by the whole series.
+    fit_check : dict or None -- :meth:`goodness_of_fit` as computed when sampling (None with an
+    inferred noise, or for a posterior built by hand).
     """
 
     chain: np.ndarray
@@ -1196,6 +1237,7 @@ class Posterior:
     covariance: np.ndarray | None = None
     noise_bounds: tuple | None = None
     correlated: np.ndarray | None = None
+    fit_check: dict | None = None
 
     @property
     def samples(self) -> np.ndarray:
@@ -1292,8 +1334,6 @@ class Posterior:
         ndarray, shape (K,), or float
             :math:`\Delta` (dimensionless, >= 0); ``inf`` outside the prior box.
         """
-        from scipy.optimize import minimize
-
         P = 2 if self.sigma_known is not None else 3
         pts = np.asarray(points, float)
         single = pts.ndim == 1
@@ -1303,6 +1343,18 @@ class Posterior:
         lo = np.array([self.bounds[name][0] for name in PARAMETERS[:P]])
         hi = np.array([self.bounds[name][1] for name in PARAMETERS[:P]])
         nll = self._profile_nll(P)
+        _, best = self._best_fit(nll, P, lo, hi)
+        inside = np.all((pts >= lo) & (pts <= hi), axis=1)
+        out = np.full(pts.shape[0], np.inf)
+        if inside.any():
+            out[inside] = np.maximum(2.0 * (nll(pts[inside]) - best), 0.0)
+        return float(out[0]) if single else out
+
+    def _best_fit(self, nll, P, lo, hi):
+        """The point of largest likelihood in the prior box, (P,), and its negative log likelihood:
+        the chain's and the least-squares minima's best point, polished by Nelder-Mead."""
+        from scipy.optimize import minimize
+
         starts = [self.samples[np.argmax(self.log_prob.ravel()), :P]]
         starts += [np.array([f.n, f.kappa, f.sigma][:P], float).ravel() for f in self.least_squares]
         values = nll(np.stack(starts))
@@ -1312,12 +1364,44 @@ class Posterior:
             return float(nll(x[None])[0]) if np.all((x >= lo) & (x <= hi)) else np.inf
 
         polished = minimize(boxed, x0, method="Nelder-Mead", options={"xatol": 1e-9, "fatol": 1e-9})
-        best = min(best, float(polished.fun))
-        inside = np.all((pts >= lo) & (pts <= hi), axis=1)
-        out = np.full(pts.shape[0], np.inf)
-        if inside.any():
-            out[inside] = np.maximum(2.0 * (nll(pts[inside]) - best), 0.0)
-        return float(out[0]) if single else out
+        if float(polished.fun) < best:
+            return np.asarray(polished.x, float), float(polished.fun)
+        return np.asarray(x0, float), best
+
+    def goodness_of_fit(self) -> dict | None:
+        r"""Whether the data fit the model within their stated errors: the best fit's chi-square.
+
+        :math:`\chi^2 = r^T V^{-1} r` at the point of largest likelihood in the prior box, with
+        :math:`V` the likelihood's error covariance (noise, ``systematic``, ``correlated``,
+        ``covariance``), and its p-value against :math:`\chi^2_{M-P}` (M measured geometries, P fitted
+        parameters; a best fit held by the prior box makes it conservative). A p-value below
+        :data:`FIT_P_MIN` says the errors are understated, the geometry is wrong (angles in other units,
+        a wrong azimuth) or the model misses an error term: the intervals, which take the stated errors
+        as true, are then too narrow. With an inferred noise the noise absorbs any misfit and there is
+        nothing to test.
+
+        Returns
+        -------
+        dict or None
+            ``{"chi2": float, "dof": int, "p_value": float}``; None with an inferred noise or when there
+            are no more geometries than parameters (``dof`` < 1).
+        """
+        from scipy import stats
+
+        P = 2 if self.sigma_known is not None else 3
+        M = int(np.isfinite(self.dolp).sum())
+        if self.noise_bounds is not None or M - P < 1:
+            return None
+        lo = np.array([self.bounds[name][0] for name in PARAMETERS[:P]])
+        hi = np.array([self.bounds[name][1] for name in PARAMETERS[:P]])
+        forward, like = self._likelihood(P)
+
+        def nll(x):
+            return -like.log_likelihood(forward(np.asarray(x, float)[:, :P]), None)
+
+        x, _ = self._best_fit(nll, P, lo, hi)
+        chi2 = float(like.chi2(forward(x[None]))[0])
+        return {"chi2": chi2, "dof": M - P, "p_value": float(stats.chi2.sf(chi2, M - P))}
 
     def confidence_region(self, points, level: float = 0.68):
         """Whether points lie in the joint likelihood-ratio confidence region at ``level``
@@ -1366,9 +1450,9 @@ class Posterior:
         M = int(np.isfinite(self.dolp).sum())
         return float(M * np.log1p(P / (M - P) * stats.f.ppf(level, P, M - P)))
 
-    def _profile_nll(self, P: int):
-        """Negative log likelihood of points (K, P), an inferred noise maximised out on a fine grid of
-        its log-uniform range (512 steps: the profile is within 1e-3 of its maximum)."""
+    def _likelihood(self, P: int):
+        """The forward model of the data's geometries and the likelihood of the posterior's error
+        model (sigma fixed when it was known)."""
         sigma = self.sigma_known
         forward = DolpForward(self.theta_i, self.theta_r, self.phi, sigma=sigma, **self.model_kw)
         like = DolpLogPosterior(
@@ -1383,6 +1467,12 @@ class Posterior:
             covariance=self.covariance,
             correlated=self.correlated,
         )
+        return forward, like
+
+    def _profile_nll(self, P: int):
+        """Negative log likelihood of points (K, P), an inferred noise maximised out on a fine grid of
+        its log-uniform range (512 steps: the profile is within 1e-3 of its maximum)."""
+        forward, like = self._likelihood(P)
         grid = None
         if like.infers_noise:
             grid = np.geomspace(*self.noise_bounds, 512)
@@ -1453,6 +1543,7 @@ class Posterior:
             "parameters": params,
             "diagnostics": self._diagnostics(ess),
             "prior": self._prior(),
+            "goodness_of_fit": None if self.fit_check is None else dict(self.fit_check),
             "messages": list(self.messages),
         }
 
@@ -1676,13 +1767,33 @@ def sample_posterior(
     post = diagnose(problem, samplers, opts, minima, messages, rng, time.perf_counter() - t0)
     if not post.converged:
         warnings.warn(post.convergence_reason, ConvergenceWarning, stacklevel=2)
+    _check_fit(post)
     return post
+
+
+def _check_fit(post: Posterior) -> None:
+    """Store :meth:`Posterior.goodness_of_fit` in ``post.fit_check``; a misfit becomes a message and a
+    :class:`MisfitWarning`."""
+    post.fit_check = post.goodness_of_fit()
+    g = post.fit_check
+    if g is None or not g["p_value"] < FIT_P_MIN:
+        return
+    text = (
+        f"the data do not fit the model within their stated errors: chi-square {g['chi2']:.4g} for "
+        f"{g['dof']} degrees of freedom (p = {g['p_value']:.1e} < {FIT_P_MIN:g}), so the intervals, which "
+        "take those errors as true, are too narrow; check the noise level, the geometry (angles in "
+        "radians, phi = pi in the specular plane) and the model error (systematic=, or noise=None to "
+        "infer the noise)"
+    )
+    post.messages.append(text)
+    warnings.warn(text, MisfitWarning, stacklevel=3)
 
 
 def _sample_task(task):
     y, seed, args, kw = task
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)  # kept in Posterior.messages
+        warnings.simplefilter("ignore", MisfitWarning)  # kept too
         try:
             return sample_posterior(y, *args, rng=np.random.default_rng(seed), **kw)
         except (ValueError, np.linalg.LinAlgError) as err:
@@ -1798,6 +1909,14 @@ def sample_posteriors(
         warnings.warn(
             f"{len(bad)} of {len(posts)} posteriors not converged (see Posterior.messages)",
             ConvergenceWarning,
+            stacklevel=2,
+        )
+    misfit = [p for p in posts if p.fit_check is not None and p.fit_check["p_value"] < FIT_P_MIN]
+    if misfit:
+        warnings.warn(
+            f"{len(misfit)} of {len(posts)} posteriors: the data do not fit the model within their "
+            f"stated errors (chi-square p < {FIT_P_MIN:g}; see Posterior.messages)",
+            MisfitWarning,
             stacklevel=2,
         )
     return posts

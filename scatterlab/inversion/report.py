@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scatterlab.inversion.posterior import PARAMETERS, Posterior
+from scatterlab.inversion.posterior import FIT_P_MIN, PARAMETERS, Posterior
 from scatterlab.runtime.results import atomic_write_bytes, write_text
 
 __all__ = ["posterior_report", "report_index", "summary_table"]
@@ -214,6 +214,18 @@ def _markdown(post, name, truth, title=None, notes=()) -> str:
         f"{'**multimodal**' if d['multimodal'] else 'one mode'}; {d['seconds']:.1f} s.",
         "",
     ]
+    g = post.fit_check
+    if g is not None:
+        lines += [
+            f"Goodness of fit under the stated errors: chi-square {g['chi2']:.2f} for {g['dof']} degrees of "
+            f"freedom, p = {g['p_value']:.2g}"
+            + (
+                " (**the data do not fit the model within these errors**)."
+                if g["p_value"] < FIT_P_MIN
+                else "."
+            ),
+            "",
+        ]
     if post.messages:
         lines += ["Warnings:", ""] + [f"- {m}" for m in post.messages] + [""]
     for kind in ("corner", "trace", "predictive"):

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scatterlab._checks import as_angle, as_finite, broadcast
+from scatterlab._checks import as_angle, as_azimuth, broadcast
 
 __all__ = [
     "FacetGeometry",
@@ -108,7 +108,7 @@ class FacetGeometry:
 
 
 def check_angles(theta_i, theta_r, phi):
-    """Validate and broadcast ``theta_i, theta_r`` in [0, pi/2] and finite ``phi`` [rad].
+    """Validate and broadcast ``theta_i, theta_r`` in [0, pi/2] and ``phi`` in [-2 pi, 2 pi] [rad].
 
     Parameters
     ----------
@@ -124,7 +124,7 @@ def check_angles(theta_i, theta_r, phi):
     """
     ti = as_angle(theta_i, "theta_i")
     tr = as_angle(theta_r, "theta_r")
-    ph = as_finite(phi, "phi")
+    ph = as_azimuth(phi, "phi")
     return broadcast(theta_i=ti, theta_r=tr, phi=ph)
 
 
