@@ -135,6 +135,9 @@ class RegionEstimate:
         "covers95"}``, the truth's likelihood-ratio statistic, the thresholds of the joint (n, kappa)
         confidence regions and whether it lies in them
         (:meth:`scatterlab.inversion.Posterior.likelihood_ratio`).
+    goodness_of_fit : dict or None
+        ``{"chi2", "dof", "p_value"}`` of the best fit under the region's error model
+        (:meth:`scatterlab.inversion.Posterior.goodness_of_fit`); None with an inferred noise.
     """
 
     name: str
@@ -144,6 +147,7 @@ class RegionEstimate:
     chain: np.ndarray | None = None
     data: RegionData | None = None
     joint: dict | None = None
+    goodness_of_fit: dict | None = None
 
 
 @dataclass
@@ -392,7 +396,7 @@ def _summarise(name, post, data: RegionData) -> RegionEstimate:
                 f"the corrected DOLP left [0, 1] at {held} of {data.mean.size} geometries and is held at "
                 "the bound there (its error still carries the correction)"
             )
-    return RegionEstimate(name, params, converged, notes, post.chain, data, joint)
+    return RegionEstimate(name, params, converged, notes, post.chain, data, joint, fit)
 
 
 def _covariance(region: RegionData, error) -> np.ndarray:

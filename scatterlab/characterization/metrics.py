@@ -409,5 +409,7 @@ def score_plate(result, cfg, rng, *, executor=None, priors=None) -> None:
                 )
                 if r.joint is not None:
                     cs[f"posterior_{name}"]["joint"] = r.joint
+                if r.goodness_of_fit is not None:
+                    cs[f"posterior_{name}"]["goodness_of_fit"] = r.goodness_of_fit
         result.estimates[key] = est
         result.metrics[key] = cs
