@@ -339,3 +339,9 @@ def test_every_accepted_rng_form_gives_a_reproducible_generator():
     for form in (7, np.int64(7), [7], np.random.SeedSequence(7), np.random.PCG64(7)):
         assert as_rng(form).integers(1 << 30) == np.random.default_rng(7).integers(1 << 30)
     assert isinstance(as_rng(None), np.random.Generator)
+
+
+def test_thilak_two_step_refuses_a_float_rng():
+    th = np.radians([30.0, 40.0, 50.0, 60.0])
+    with pytest.raises(ValueError, match="rng must be None"):
+        thilak_two_step(np.full(4, 0.5), th, th, 1.5)

@@ -90,6 +90,7 @@ from pathlib import Path
 
 import numpy as np
 
+from scatterlab._checks import as_rng
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.inversion.least_squares import (
     DEFAULT_BOUNDS,
@@ -827,7 +828,7 @@ def start_walkers(
     ndarray (n_walkers, D)
         Starts strictly inside the prior box, D = the sampled dimensions.
     """
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     lo, hi, P, D = problem.lo, problem.hi, problem.P, problem.ndim
     lp = problem.log_post
     x = np.empty((n_walkers, D))
@@ -1634,7 +1635,7 @@ class Posterior:
         likelihood's
         errors (only at the data's geometries when a systematic or covariance is part of it).
         """
-        rng = np.random.default_rng(rng)
+        rng = as_rng(rng)
         new = theta_i is not None or theta_r is not None or phi is not None
         ti = self.theta_i if theta_i is None else np.atleast_1d(theta_i)
         tr = self.theta_r if theta_r is None else np.atleast_1d(theta_r)
@@ -1733,7 +1734,7 @@ def sample_posterior(
     Posterior
         A :class:`ConvergenceWarning` is raised (and kept in ``messages``) when it is not converged.
     """
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     prior, opts, model_kw = _resolve_options(prior, sampler, dict(options))
     given = dict(
         phi=phi,
@@ -1877,8 +1878,14 @@ def sample_posteriors(
     """
     from scatterlab.runtime import get_executor
 
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     y = np.atleast_2d(np.asarray(dolp, float))
+    empty = np.flatnonzero(~np.any(np.isfinite(y), axis=-1))
+    if empty.size:  # refused here, before the batch is dispatched, instead of failing in a worker
+        raise ValueError(
+            f"dolp has {empty.size} problem(s) without a finite value (rows {empty[:10].tolist()}): "
+            "a region without light has no posterior; leave those rows out"
+        )
     seeds = rng.integers(2**63, size=y.shape[0])
     per_problem_bounds = isinstance(bounds, (list, tuple))
     if per_problem_bounds and len(bounds) != y.shape[0]:

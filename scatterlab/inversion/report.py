@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from scatterlab._checks import as_rng
 from scatterlab.inversion.posterior import FIT_P_MIN, PARAMETERS, Posterior
 from scatterlab.runtime.results import atomic_write_bytes, write_text
 
@@ -125,7 +126,7 @@ def posterior_report(
     _save(_corner_figure(post, labels, truth), out / f"{name}_corner.png", overwrite)
     _save(_trace_figure(post, labels), out / f"{name}_trace.png", overwrite)
     _save(
-        _predictive_figure(post, np.random.default_rng(rng)),
+        _predictive_figure(post, as_rng(rng)),
         out / f"{name}_predictive.png",
         overwrite,
     )

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import ETA_MIN, as_angle, as_finite, as_positive, check_starts
+from scatterlab._checks import ETA_MIN, as_angle, as_finite, as_positive, as_rng, check_starts
 from scatterlab.fresnel import smooth_dolp
 from scatterlab.inversion.design import inverse_information
 
@@ -188,6 +188,7 @@ def thilak_two_step(
         ``start`` not a finite (n, kappa) pair with both >= 0; ``max_restarts`` not an integer >= 0.
     """
     margin = float(as_positive(margin, "margin", allow_zero=True))
+    rng = as_rng(rng)
     start = check_starts([start], "start")[0]
     if isinstance(max_restarts, bool) or not isinstance(max_restarts, (int, np.integer)):
         raise ValueError(f"max_restarts must be an integer >= 0, got {max_restarts!r}")
