@@ -44,6 +44,43 @@ ANGLES_0_60_120 = np.radians([0.0, 60.0, 120.0])
 # [e-] the largest mean signal and mean dark count of a pixel: numpy's Poisson sampler refuses means
 # above 9.2e18 (its int64 range), and the two means add
 _MAX_MEAN = 1e18
+# [rad] the largest |polarizer angle| accepted: a full turn, as scatterlab.deconvolution.blind_deconvolve
+# (a list such as 0, 45, 90, 135 is in degrees)
+_MAX_ANGLE = 2 * np.pi
+# relative round-off allowed in the checks of Stokes images and PSFs (S0 >= |(S1, S2)|, h >= 0, sum h = 1)
+_ROUNDING = 1e-9
+
+
+def _polarizer_angles(angles, name: str = "angles") -> np.ndarray:
+    """Check polarizer angles [rad]: finite and within a full turn, ``|a| <= 2 pi``.
+
+    Angles beyond a full turn are almost always degrees (0, 45, 90, 135), which would otherwise be
+    read silently as radians and give a wrong analyzer matrix.
+
+    Parameters
+    ----------
+    angles : array_like, shape (K,)
+        Polarizer angles [rad] from the s axis.
+    name : str
+        Argument name used in the error message.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        The angles [rad] (flattened).
+
+    Raises
+    ------
+    ValueError
+        A non-finite angle or one outside ``[-2 pi, 2 pi]``.
+    """
+    a = as_finite(angles, name).ravel()
+    if np.any(np.abs(a) > _MAX_ANGLE * (1 + 1e-12)):
+        raise ValueError(
+            f"{name} must be polarizer angles in radians in [-2 pi, 2 pi], got values up to "
+            f"{np.abs(a).max():g} (degrees? use numpy.radians)"
+        )
+    return a
 
 
 def analyzer_matrix(angles) -> np.ndarray:
@@ -52,14 +89,20 @@ def analyzer_matrix(angles) -> np.ndarray:
     Parameters
     ----------
     angles : array_like, shape (K,)
-        Polarizer angles [rad] (flattened); at least three distinct orientations mod pi.
+        Polarizer angles [rad] in ``[-2 pi, 2 pi]`` (flattened; larger values are taken for degrees and
+        refused); at least three distinct orientations mod pi.
 
     Returns
     -------
     ndarray, shape (K, 3)
         Analyzer rows ``0.5 (1, cos 2a, sin 2a)``.
+
+    Raises
+    ------
+    ValueError
+        Angles outside ``[-2 pi, 2 pi]`` (degrees?) or fewer than three distinct orientations.
     """
-    a = as_finite(angles, "angles").ravel()
+    a = _polarizer_angles(angles, "angles")
     P = 0.5 * np.stack([np.ones_like(a), np.cos(2 * a), np.sin(2 * a)], axis=1)
     if np.linalg.matrix_rank(P) < 3:
         raise ValueError(
@@ -129,23 +172,57 @@ def channel_images(stokes, angles, psfs=None) -> np.ndarray:
 
     Parameters
     ----------
-    stokes : array_like ``(H, W, 3)`` (or ``(H, W, 4)``), Stokes axis last [any intensity unit].
-    angles : array_like ``(K,)`` [rad], polarizer angles from the s axis.
-    psfs : None (no blur), one ``(H, W)`` PSF shared by all channels (division of amplitude), or
-        ``(K, H, W)`` (sequential capture, one realization per channel); centred, unit sum.
+    stokes : array_like, shape ``(H, W, 3)`` (or ``(H, W, 4)``)
+        Physical linear Stokes images, Stokes axis last [any intensity unit]: ``S0 >= sqrt(S1^2 + S2^2)``
+        at every pixel (up to a round-off of 1e-9 of the image's largest ``|S|``).
+    angles : array_like, shape ``(K,)``
+        Polarizer angles [rad] from the s axis, in ``[-2 pi, 2 pi]`` (degrees are refused).
+    psfs : None or array_like, shape ``(H, W)`` or ``(K, H, W)``
+        None (no blur), one PSF shared by all channels (division of amplitude), or one per channel
+        (sequential capture, one realization per channel). Each PSF is centred, non-negative and has
+        unit sum (to 1e-9: the sum scales the channels' light).
 
     Returns
     -------
-    ndarray ``(K, H, W)``: ``0.5 (S0 + S1 cos 2a_k + S2 sin 2a_k)`` blurred by the PSF(s).
+    ndarray, shape ``(K, H, W)``
+        ``0.5 (S0 + S1 cos 2a_k + S2 sin 2a_k)`` blurred by the PSF(s), same unit as ``stokes``; >= 0.
+
+    Raises
+    ------
+    ValueError
+        Degrees for ``angles``, an unphysical ``stokes`` (``S0 < sqrt(S1^2 + S2^2)`` or ``S0 < 0``), a
+        negative PSF or one whose sum is not 1, or shapes that do not match.
     """
     S = stokes_image(stokes, "stokes")
     P = analyzer_matrix(angles)
+    tol = _ROUNDING * float(np.abs(S).max(initial=0.0))
+    excess = np.hypot(S[..., 1], S[..., 2]) - S[..., 0]
+    if np.any(excess > tol):
+        h, w = np.unravel_index(int(np.argmax(excess)), excess.shape)
+        raise ValueError(
+            "stokes must be physical, S0 >= sqrt(S1^2 + S2^2) (degree of polarization <= 1, S0 >= 0), "
+            f"at every pixel; got S = {tuple(float(v) for v in S[h, w])} at pixel ({h}, {w})"
+        )
     I = np.einsum("ks,hws->khw", P, S)
     if psfs is None:
         return I
     psfs = as_finite(psfs, "psfs")
-    if psfs.ndim == 3 and psfs.shape[0] != P.shape[0]:
-        raise ValueError("psfs must be one PSF (H, W) or one per channel (K, H, W)")
+    K = P.shape[0]
+    if psfs.ndim not in (2, 3) or (psfs.ndim == 3 and psfs.shape[0] != K):
+        raise ValueError(
+            f"psfs must be one PSF (H, W) or one per channel ({K}, H, W), got shape {psfs.shape}"
+        )
+    peak = psfs.max(axis=(-2, -1), keepdims=True)
+    if np.any(psfs < -_ROUNDING * np.abs(peak)):
+        raise ValueError(
+            f"psfs must be non-negative (a PSF is an intensity), got a minimum of {psfs.min():g}"
+        )
+    total = psfs.sum(axis=(-2, -1))
+    if np.any(np.abs(total - 1) > _ROUNDING):
+        raise ValueError(
+            "psfs must have unit sum (a PSF spreads the light, it does not add or remove it; divide "
+            f"by psfs.sum(axis=(-2, -1))), got sums {np.ravel(total)[:4]}"
+        )
     # the FFT's round-off leaves -1e-16 where the image is dark: intensities are >= 0
     return np.maximum(convolve(I, psfs), 0.0)
 
@@ -222,11 +299,17 @@ def stokes_from_channels(channels, angles) -> np.ndarray:
     Parameters
     ----------
     channels : array_like ``(K, H, W)`` [counts or intensity], one image per polarizer.
-    angles : array_like ``(K,)`` [rad].
+    angles : array_like ``(K,)`` [rad], in ``[-2 pi, 2 pi]`` (degrees are refused).
 
     Returns
     -------
     ndarray ``(H, W, 3)``: (S0, S1, S2) with the Stokes axis last, same unit as ``channels``.
+
+    Raises
+    ------
+    ValueError
+        Degrees for ``angles``, fewer than three distinct orientations, or ``channels`` not
+        ``(K, H, W)``.
     """
     I = as_finite(channels, "channels")
     P = analyzer_matrix(angles)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize, special
 
-from scatterlab._checks import as_finite, as_positive
+from scatterlab._checks import as_count, as_finite, as_positive
 
 __all__ = [
     "circular_pupil",
@@ -77,24 +77,44 @@ def psf(pupil, phase=None, pad: int = 2) -> np.ndarray:
 
     Parameters
     ----------
-    pupil : array (..., n, n)
-    phase : array broadcastable to ``pupil``, optional
-    pad : int >= 2 (Nyquist sampling of the incoherent PSF)
+    pupil : array_like, shape (..., n, n)
+        Pupil amplitude (transmits light: not zero everywhere).
+    phase : array_like, optional
+        Pupil phase [rad], broadcastable to ``pupil`` (e.g. ``(n, n)``, or ``(F, n, n)`` for ``F``
+        screens through one pupil).
+    pad : int
+        Zero-padding factor, an integer >= 2 (Nyquist sampling of the incoherent PSF).
 
     Returns
     -------
-    array (..., pad n, pad n)
+    ndarray, shape (..., pad n, pad n)
+        Centred PSF(s), unit sum each; the leading shape is that of ``pupil`` and ``phase`` broadcast.
+
+    Raises
+    ------
+    ValueError
+        ``pad`` < 2, a dark pupil, or ``phase`` and ``pupil`` shapes that do not broadcast.
     """
     pupil = as_finite(pupil, "pupil")
-    if pad < 2:
-        raise ValueError("pad must be >= 2 for a Nyquist-sampled PSF")
+    pad = as_count(pad, "pad", lo=2, unit=" (Nyquist sampling of the PSF)")
+    if pupil.ndim < 2 or pupil.shape[-1] != pupil.shape[-2]:
+        raise ValueError(f"pupil must be a square array (..., n, n), got shape {pupil.shape}")
     if not np.all(np.any(pupil != 0, axis=(-2, -1))):
         raise ValueError(
             "pupil must transmit light (it is zero everywhere): the PSF would be undefined"
         )
-    field = (
-        pupil.astype(complex) if phase is None else pupil * np.exp(1j * as_finite(phase, "phase"))
-    )
+    if phase is None:
+        field = pupil.astype(complex)
+    else:
+        phase = as_finite(phase, "phase")
+        try:
+            np.broadcast_shapes(pupil.shape, phase.shape)
+        except ValueError:
+            raise ValueError(
+                f"phase (shape {phase.shape}) must broadcast to pupil (shape {pupil.shape}): one "
+                "phase value per pupil pixel"
+            ) from None
+        field = pupil * np.exp(1j * phase)
     n = pupil.shape[-1]
     m = pad * n
     F = np.fft.fft2(field, s=(m, m))
@@ -147,9 +167,9 @@ def radial_profile(image, nbins=None) -> tuple[np.ndarray, np.ndarray]:
     Parameters
     ----------
     image : array_like, shape (n, n)
-        Centred image (centre at pixel ``n // 2``).
+        Centred, finite image (centre at pixel ``n // 2``).
     nbins : int, optional
-        Number of integer radii; default ``n // 2``.
+        Number of integer radii, >= 1; default ``n // 2`` (at least 1).
 
     Returns
     -------
@@ -157,15 +177,23 @@ def radial_profile(image, nbins=None) -> tuple[np.ndarray, np.ndarray]:
         Radii ``0, 1, ..., nbins - 1`` [pixels].
     mean : ndarray, shape (nbins,)
         Mean of the image over the pixels at each rounded radius (0 where there are none).
+
+    Raises
+    ------
+    ValueError
+        ``image`` not a finite square 2-D array, or ``nbins`` not an integer >= 1.
     """
-    image = np.asarray(image, float)
+    image = as_finite(image, "image")
+    if image.ndim != 2 or image.shape[0] != image.shape[1]:
+        raise ValueError(
+            f"image must be one square 2-D image (n, n), got shape {image.shape}; for a stack, call "
+            "radial_profile on each image"
+        )
     n = image.shape[-1]
-    y, x = np.indices(image.shape[-2:]) - n // 2
+    nb = max(n // 2, 1) if nbins is None else as_count(nbins, "nbins", lo=1)
+    y, x = np.indices(image.shape) - n // 2
     r = np.rint(np.hypot(x, y)).astype(int)
-    nb = nbins or n // 2
-    sums = np.bincount(
-        r.ravel(), weights=image.reshape(-1) if image.ndim == 2 else image.ravel(), minlength=nb
-    )
+    sums = np.bincount(r.ravel(), weights=image.ravel(), minlength=nb)
     counts = np.bincount(r.ravel(), minlength=nb)
     return np.arange(nb), sums[:nb] / np.maximum(counts[:nb], 1)
 
@@ -277,9 +305,20 @@ def fit_r0(nu, measured_mtf, diameter, *, floor: float = 0.02) -> float:
     -------
     float
         Fried parameter r0 [m].
+
+    Raises
+    ------
+    ValueError
+        ``nu`` and ``measured_mtf`` not 1-D of one length, non-finite values, or fewer than three
+        frequencies in (0, 1) above ``floor``.
     """
     nu = as_finite(nu, "nu")
     m = as_finite(measured_mtf, "measured_mtf")
+    if nu.ndim != 1 or m.shape != nu.shape:
+        raise ValueError(
+            "nu and measured_mtf must be 1-D arrays of the same length N (one MTF value per "
+            f"frequency), got shapes nu {nu.shape} and measured_mtf {m.shape}"
+        )
     D = float(as_positive(diameter, "diameter"))
     order = np.argsort(nu)
     nu, m = nu[order], m[order]

@@ -135,3 +135,61 @@ def test_dolp_images_follow_the_package_rule(rng):
     np.testing.assert_array_equal(d.filled(np.nan), dolp(S, min_intensity=0.6))
     np.testing.assert_array_equal(a.filled(np.nan), aop(S, min_intensity=0.6))
     assert d.mask[0, 0] and np.array_equal(d.mask, ~(S[..., 0] > 0.6))
+
+
+def test_polarizer_angles_in_degrees_are_refused():
+    """0, 45, 90, 135 (degrees) were read as radians: S = (1, .2, .4) came back as (1.03, -.10, .40)."""
+    from scatterlab.imaging import analyzer_matrix
+
+    S = np.ones((4, 4, 3)) * [1.0, 0.2, 0.4]
+    degrees = [0, 45, 90, 135]
+    for call in (
+        lambda: channel_images(S, degrees),
+        lambda: stokes_from_channels(np.ones((4, 4, 4)), degrees),
+        lambda: analyzer_matrix(degrees),
+    ):
+        with pytest.raises(
+            ValueError, match=r"angles must be .* radians in \[-2 pi, 2 pi\].*degrees"
+        ):
+            call()
+    # any angle within a full turn is a polarizer: 0/45/90/135 deg plus a half turn is the same analyzer.
+    # Malus (Eq. 197) by hand: 0.5 (1 + 0.2 cos 2a + 0.4 sin 2a) = 0.6, 0.7, 0.4, 0.3
+    angles = ANGLES_0_45_90_135 + np.pi
+    ch = channel_images(S, angles)
+    np.testing.assert_allclose(ch[:, 0, 0], [0.6, 0.7, 0.4, 0.3], rtol=1e-14)
+    np.testing.assert_allclose(stokes_from_channels(ch, angles - 2 * np.pi), S, rtol=1e-14)
+
+
+def test_unphysical_stokes_and_psfs_are_refused(rng):
+    """S1 = 2 S0 gave a channel of -0.5, and a negative PSF a silently black image."""
+    dark, one = np.zeros((4, 4)), np.ones((4, 4))
+    A = ANGLES_0_45_90_135
+    with pytest.raises(ValueError, match=r"stokes must be physical, S0 >= sqrt\(S1\^2 \+ S2\^2\)"):
+        channel_images(np.dstack([one, 2 * one, dark]), A)
+    with pytest.raises(ValueError, match="stokes must be physical"):
+        channel_images(np.dstack([-one, dark, dark]), A)
+    S = np.dstack([one, dark, dark])
+    with pytest.raises(ValueError, match="psfs must be non-negative"):
+        channel_images(S, A, psfs=-one / 16)
+    with pytest.raises(ValueError, match="psfs must have unit sum"):
+        channel_images(S, A, psfs=one)
+    with pytest.raises(
+        ValueError, match=r"psfs must be one PSF \(H, W\) or one per channel \(4, H, W\)"
+    ):
+        channel_images(S, A, psfs=np.ones((3, 4, 4)) / 16)
+    # fully polarized light (DOLP = 1 up to rounding) is physical: behind a polarizer at its own angle it
+    # passes entirely, behind the crossed one not at all (Malus)
+    a = rng.uniform(-np.pi / 2, np.pi / 2, (8, 8))
+    full = np.stack([np.ones((8, 8)), np.cos(2 * a), np.sin(2 * a)], axis=-1)
+    ch = channel_images(full, np.stack([a[0, 0], a[0, 0] + np.pi / 2, 0.3]))
+    assert ch[0, 0, 0] == pytest.approx(1.0, abs=1e-15) and ch[1, 0, 0] == pytest.approx(
+        0, abs=1e-15
+    )
+    # a unit-sum, non-negative PSF conserves the light of every channel
+    h = rng.uniform(0, 1, (8, 8))
+    h /= h.sum()
+    np.testing.assert_allclose(
+        channel_images(full, A, h).sum(axis=(1, 2)),
+        channel_images(full, A).sum(axis=(1, 2)),
+        rtol=1e-12,
+    )

@@ -72,3 +72,34 @@ def test_bad_input():
         long_exposure_mtf(0.1, -1)
     with pytest.raises(ValueError, match="three"):
         fit_r0(np.linspace(0, 1, 10), np.zeros(10), 1.0)
+
+
+def test_shape_mismatches_and_stacks_are_named():
+    """psf: numpy's 'operands could not be broadcast'; fit_r0: an IndexError; radial_profile of a stack:
+    numpy's 'weights and list don't have the same length'."""
+    with pytest.raises(
+        ValueError, match=r"phase \(shape \(16, 16\)\) must broadcast to pupil \(shape \(32, 32\)\)"
+    ):
+        psf(circular_pupil(32, 16), np.zeros((16, 16)), pad=2)
+    with pytest.raises(ValueError, match="pad must be an integer >= 2"):
+        psf(circular_pupil(8, 4), pad=2.5)
+    for nu, m in (
+        (np.linspace(0, 1, 10), np.full(9, 0.5)),
+        (np.linspace(0, 1, 10).reshape(2, 5), np.full((2, 5), 0.5)),
+    ):
+        with pytest.raises(
+            ValueError, match=r"nu and measured_mtf must be 1-D arrays of the same length"
+        ):
+            fit_r0(nu, m, 0.1)
+    with pytest.raises(
+        ValueError, match=r"image must be one square 2-D image \(n, n\), got shape \(2, 8, 8\)"
+    ):
+        radial_profile(np.ones((2, 8, 8)))
+    with pytest.raises(ValueError, match="image must be finite"):
+        radial_profile(np.full((8, 8), np.nan))
+    with pytest.raises(ValueError, match="nbins must be an integer >= 1"):
+        radial_profile(np.ones((8, 8)), 0)
+    # the radial profile of a rotationally symmetric image is the function of the rounded radius
+    y, x = np.indices((33, 33)) - 16
+    r, prof = radial_profile(np.rint(np.hypot(x, y)) ** 2)
+    np.testing.assert_array_equal(prof, r.astype(float) ** 2)

@@ -1,5 +1,8 @@
 """Turbulence: spectra and screens against independent truths (closed forms, quadrature of the spectrum)."""
 
+import contextlib
+import warnings
+
 import numpy as np
 import pytest
 
@@ -126,3 +129,137 @@ def test_bad_input(kw, match):
     L0 = args.pop("L0", np.inf)
     with pytest.raises(ValueError, match=match):
         T.phase_screen(args["n"], args["dx"], args["r0"], rng=0, L0=L0)
+
+
+@contextlib.contextmanager
+def _strict():
+    """Every warning an error (RuntimeWarning, ComplexWarning, scipy's IntegrationWarning)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        yield
+
+
+def test_structure_function_theory_at_zero_tiny_and_huge_separations():
+    """D(0) = 0 (was NaN with a divide-by-zero warning); against closed forms: Kolmogorov 6.88 (r/r0)^(5/3)
+    down to r = 1e-100 m, the von Karman 2 sigma^2 [1 - 2^(1/6) a^(5/6) K_5/6(a) / Gamma(5/6)],
+    a = 2 pi r / L0, out to r = 1e300 m (sigma^2 = 0.0229 pi (6/5) (L0/r0)^(5/3)), and for an inner scale
+    at r << l0, D = 4 pi^3 A r0^(-5/3) r^2 int f^(-2/3) exp(-(f/fm)^2) df = 2 pi^3 A r0^(-5/3) r^2 fm^(1/3)
+    Gamma(1/6), fm = 5.92 / (2 pi l0)."""
+    from scipy import special
+
+    A, r0 = T.PSD_CONSTANT, 0.1  # the spectrum constant, checked against Eq. 79 above
+    kolmogorov = 2 * (24 / 5 * special.gamma(6 / 5)) ** (5 / 6)  # Fried's 6.88
+    with _strict():
+        r = np.array([0.0, 1e-100, 1e-12, 0.01])
+        np.testing.assert_array_equal(
+            T.structure_function_theory([0.0, 0.0], r0, L0=10.0, l0=1e-3), 0
+        )
+        np.testing.assert_allclose(
+            T.structure_function_theory(r, r0), kolmogorov * (r / r0) ** (5 / 3), rtol=1e-6
+        )
+        # von Karman: the quadrature against the closed form (cancellation spoils it below a ~ 1e-2)
+        L0 = 10.0
+        a = np.array([0.05, 0.3, 1.0, 3.0, 10.0, 30.0, 49.0, 51.0, 1e3, 1e100])
+        rr = a * L0 / (2 * np.pi)
+        sigma2 = A * np.pi * 6 / 5 * (L0 / r0) ** (5 / 3)
+        closed = (
+            2
+            * sigma2
+            * (1 - 2 ** (1 / 6) / special.gamma(5 / 6) * a ** (5 / 6) * special.kv(5 / 6, a))
+        )
+        np.testing.assert_allclose(T.structure_function_theory(rr, r0, L0), closed, rtol=1e-6)
+        assert T.structure_function_theory(1e300, r0, L0)[0] == pytest.approx(2 * sigma2, rel=1e-12)
+        # the inner-scale limit, r = 1e-3 l0 (next term ~ (pi fm r)^2: 1e-6)
+        for l0 in (1e-3, 1.0, 1e4):
+            fm = 5.92 / (2 * np.pi * l0)
+            r = np.array([1e-5, 1e-3]) * l0
+            small = 2 * np.pi**3 * A * r0 ** (-5 / 3) * r**2 * fm ** (1 / 3) * special.gamma(1 / 6)
+            np.testing.assert_allclose(T.structure_function_theory(r, r0, l0=l0), small, rtol=1e-5)
+
+
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda: T.structure_function_theory([0.01], -0.1), "r0 must be > 0"),
+        (lambda: T.structure_function_theory([0.01], 0.0), "r0 must be > 0"),
+        (lambda: T.structure_function_theory([-0.01], 0.1), "r must be >= 0"),
+        (lambda: T.structure_function_theory([np.nan], 0.1), "r must be finite"),
+        (lambda: T.structure_function_theory([0.01], 0.1, L0=0.0), "L0"),
+        (lambda: T.structure_function_theory([0.01], 0.1, l0=-1.0), "l0"),
+        (lambda: T.structure_function_theory([1e300], 1e-10), "r / r0 .* too large"),
+        (lambda: T.phase_variance_theory(0.1, 1e300), "L0 / r0 .* too large"),
+        (lambda: T.phase_variance_theory(-0.1, 1.0), "r0 must be > 0"),
+        (lambda: T.phase_psd(1.0, 1e-200), "f and 1 / L0 must not both be below .* r0 = 1e-200"),
+        (lambda: T.phase_psd(1.0, -0.1), "r0 must be > 0"),
+        (lambda: T.phase_psd(1.0, 0.1, l0=np.nan), "l0"),
+        (lambda: T.kolmogorov_psd(1e-90, 1e-14), "kappa must be >= 5.1.e-89 rad/m"),
+        (lambda: T.kolmogorov_psd(0.0, 1e-14), "kappa must be > 0"),
+        (
+            lambda: T.von_karman_psd(1e-90, 1e-14, L0=1e100),
+            "kappa and 2 pi / L0 must not both be below",
+        ),
+        (lambda: T.von_karman_psd(1.0, -1e-14), "cn2 must be >= 0"),
+        (
+            lambda: T.phase_screen(8, 0.01, 0.1, rng=0, l0=1e160),
+            r"l0 \(inner scale\) must be in \[0, 10 n dx\]",
+        ),
+        (lambda: T.SlidingScreen(8, 0.01, 0.1, rng=0, l0=1e3), r"l0 \(inner scale\) must be in"),
+        (
+            lambda: T.structure_function(np.ones((2, 8, 8)), 8),
+            r"max_separation must be in \[1, 7\] pixels",
+        ),
+        (
+            lambda: T.structure_function(np.ones((2, 8, 8)), 0),
+            "max_separation must be an integer >= 1",
+        ),
+        (
+            lambda: T.structure_function(np.ones((2, 8, 8)), -1),
+            "max_separation must be an integer >= 1",
+        ),
+        (
+            lambda: T.structure_function(np.ones((2, 8, 8)), 2.5),
+            "max_separation must be an integer >= 1",
+        ),
+        (lambda: T.structure_function(np.full((2, 8, 8), np.nan), 3), "screens must be finite"),
+        (lambda: T.remove_piston_tilt(np.full((8, 8), np.nan)), "phase must be finite"),
+        (lambda: T.remove_piston_tilt(np.full((8, 8), np.inf)), "phase must be finite"),
+        (lambda: T.remove_piston_tilt(np.ones(8)), r"phase must be a screen \(ny, nx\)"),
+    ],
+)
+def test_theory_and_estimators_refuse_bad_input(call, match):
+    with _strict():
+        with pytest.raises(ValueError, match=match):
+            call()
+
+
+def test_spectra_at_extreme_frequencies_without_overflow():
+    """kappa = 1e200 with an inner scale overflowed (the true value is 0); kappa near the double range is
+    finite and exact; zero frequency without an outer scale is the true inf. Truths: the power laws in
+    Python floats, log-space where the power would overflow an intermediate."""
+    with _strict():
+        assert T.von_karman_psd(1e200, 1e-14, l0=1e-3)[()] == 0.0
+        assert (
+            T.von_karman_psd(1e200, 1e-14, L0=10.0)[()] == 0.0
+        )  # 1e-733: below the smallest double
+        k = np.array([1e-83, 1e-40, 1.0, 1e50])
+        truth = np.exp(np.log(0.033e-14) - 11 / 3 * np.log(k))
+        np.testing.assert_allclose(T.kolmogorov_psd(k, 1e-14), truth, rtol=1e-12)
+        np.testing.assert_allclose(T.von_karman_psd(k, 1e-14), truth, rtol=1e-12)
+        assert T.von_karman_psd(0.0, 1e-14)[()] == np.inf and T.phase_psd(0.0, 0.1)[()] == np.inf
+        # the spectrum is isotropic: a signed frequency (numpy.fft.fftfreq) is its magnitude
+        assert T.phase_psd(-3.0, 0.1)[()] == T.phase_psd(3.0, 0.1)[()]
+        # r0 = 1e-100 overflowed r0^(-5/3) alone; the spectrum at f = 1e20 is 0.0229e(500/3 - 220/3)
+        f, r0 = 1e20, 1e-100
+        assert T.phase_psd(f, r0)[()] == pytest.approx(
+            0.022896 * 10 ** (500 / 3 - 220 / 3), rel=1e-4
+        )
+        # the inner scale at its limit, 10 n dx, is a clean screen
+        s = T.phase_screen(8, 0.01, 0.1, rng=0, l0=10 * 0.08)
+        assert np.all(np.isfinite(s))
+
+
+def test_structure_function_of_a_ramp_up_to_the_largest_separation():
+    """phi = c x: D(k) = 0.5 (c^2 k^2 + 0) along the two axes, up to max_separation = n - 1."""
+    x = np.arange(8.0)
+    D = T.structure_function(np.tile(0.3 * x, (8, 1)), 7)[1]
+    np.testing.assert_allclose(D, 0.5 * (0.3 * np.arange(1, 8)) ** 2, rtol=1e-12)
