@@ -345,3 +345,19 @@ def test_thilak_two_step_refuses_a_float_rng():
     th = np.radians([30.0, 40.0, 50.0, 60.0])
     with pytest.raises(ValueError, match="rng must be None"):
         thilak_two_step(np.full(4, 0.5), th, th, 1.5)
+
+
+@pytest.mark.parametrize("bad", [1.5, "abc", -1, True])
+def test_public_random_functions_refuse_an_rng_given_wrongly_by_name(bad):
+    from scatterlab import imaging
+    from scatterlab.inversion import sample_posterior
+
+    th = np.radians([30.0, 40.0, 50.0, 60.0])
+    for call in (
+        lambda: imaging.detect(np.ones((4, 4, 4)), rng=bad, photons=10),
+        lambda: imaging.phase_screen(8, 0.01, 0.1, rng=bad),
+        lambda: imaging.painted_plate(64, rng=bad),
+        lambda: sample_posterior(np.full(4, 0.5), th, th, 0.01, rng=bad, sigma=0.3),
+    ):
+        with pytest.raises(ValueError, match="rng must be None"):
+            call()

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_finite
+from scatterlab._checks import as_finite, as_rng
 from scatterlab.polarization import dolp_aop
 
 __all__ = [
@@ -281,7 +281,7 @@ def detect(
             f"scale ({scale!r}) is too small for photons ({photons!r}): the brightest pixel's mean, "
             f"photons * max(channels) / scale, must be <= {_MAX_MEAN:g} e- ({limit})"
         )
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     scale = float(I.max()) if scale is None else float(scale)
     expected = photons * I / scale if scale > 0 else np.zeros_like(I)
     frame = rng.poisson(expected + dark_current).astype(float) + read_noise * rng.standard_normal(

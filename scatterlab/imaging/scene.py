@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from scatterlab._checks import as_count
+from scatterlab._checks import as_count, as_rng
 from scatterlab.pbrdf import Model
 
 __all__ = ["Scene", "painted_plate", "render_stokes"]
@@ -100,7 +100,7 @@ def painted_plate(
     if not (np.isfinite(zoom) and 0.25 <= zoom <= 16):
         raise ValueError(f"zoom must be in [0.25, 16], got {zoom!r}")
     as_count(scratches, "scratches", 0)
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     u = n * zoom / 16  # pixels per template unit
     yy, xx = np.mgrid[0:n, 0:n]
     ty = (yy + 0.5 - n / 2) / u + float(center[0])

@@ -36,7 +36,7 @@ import warnings
 import numpy as np
 from scipy import integrate, special
 
-from scatterlab._checks import as_count, as_finite, as_positive
+from scatterlab._checks import as_count, as_finite, as_positive, as_rng
 
 __all__ = [
     "STRUCTURE_CONSTANT",
@@ -519,7 +519,7 @@ def phase_screen(n, dx, r0, rng=None, L0=np.inf, subharmonics=True, l0=0.0):
         outside ``[0, 10 n dx]``.
     """
     dx, r0 = _check_screen_args(n, dx, r0, L0, l0)
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     # in units of r0 (the screen depends on dx / r0, L0 / r0 and l0 / r0 only): no overflow for lengths
     # given in any unit, 1e-200 or 1e300
     return _fft_field(
@@ -551,7 +551,7 @@ class SlidingScreen:
         length = 4 * n if length is None else int(length)
         if length < n:
             raise ValueError("length must be >= n")
-        rng = np.random.default_rng(rng)
+        rng = as_rng(rng)
         self.n, self.dx = n, dx
         self.strip = _fft_field(
             (n, length),
