@@ -67,6 +67,24 @@ def _other_command(exc, path, command: str) -> str:
     return f"\n  {path} looks like a table for `scatterlab {other}`: try that command"
 
 
+# the integer options' smallest values, by command (None: every command that has the option); the
+# others are checked where they are used (--workers by _executor, analyze's by AnalyzeSettings,
+# fit-dolp's --posterior-steps before reading)
+INTEGER_MINIMA = {"seed": (None, 0), "posterior_steps": ("fit-mueller", 0)}
+
+
+def _integer_option_error(args) -> str | None:
+    """The one-line error for an integer option below its smallest value, naming the option, or None."""
+    for name, (command, low) in INTEGER_MINIMA.items():
+        value = getattr(args, name, None)
+        if value is None or (command is not None and args.command != command):
+            continue
+        if value < low:
+            what = "a non-negative integer" if low == 0 else f"an integer >= {low}"
+            return f"--{name.replace('_', '-')} must be {what}, got {value}"
+    return None
+
+
 def _executor(args):
     from scatterlab.runtime import get_executor
 
@@ -86,11 +104,6 @@ def _study(args) -> int:
         for sid, st in studies.discover().items():
             print(f"{sid:24s} {st.title}  [{st.reproduces}]")
         return 0
-    if args.seed is not None and args.seed < 0:
-        print(
-            f"scatterlab: --seed must be a non-negative integer, got {args.seed}", file=sys.stderr
-        )
-        return 2
     if not args.id:
         print("scatterlab study run: give a study ID or 'all'", file=sys.stderr)
         return 2
@@ -204,11 +217,6 @@ def _characterize(args) -> int:
 def _analyze(args) -> int:
     from scatterlab.characterization.analysis import AnalyzeSettings, analyze
 
-    if args.seed < 0:
-        print(
-            f"scatterlab: --seed must be a non-negative integer, got {args.seed}", file=sys.stderr
-        )
-        return 2
     given = {
         "psf": args.psf,
         "iterations": args.iterations,
@@ -403,9 +411,9 @@ def _fit_mueller(args) -> int:
 def _fit_dolp(args) -> int:
     import numpy as np
 
-    from scatterlab.inversion import sample_posterior
+    from scatterlab.inversion import ConvergenceWarning, MisfitWarning, sample_posterior
     from scatterlab.inversion.report import posterior_report
-    from scatterlab.io.dolp_table import read_dolp_table
+    from scatterlab.io.dolp_table import UNUSED_NOTE, read_dolp_table
 
     try:
         if args.sigma is not None and not 1e-3 <= args.sigma <= 2.5:
@@ -425,6 +433,10 @@ def _fit_dolp(args) -> int:
             _columns(args.column, DOLP_COLUMNS),
             angle_unit=args.angle_unit,
         )
+        # a column the reader left out (one that looks like the DOLP error has been warned of already)
+        for note in data.notes:
+            if UNUSED_NOTE in note and not note.startswith("warning:"):
+                print(f"scatterlab: note: {args.file}: {note}", file=sys.stderr)
         # report.md like the other commands' reports; refused before the sampling, in the command
         # line's words
         if (Path(args.out) / "report.md").exists() and not args.force:
@@ -434,24 +446,30 @@ def _fit_dolp(args) -> int:
         # the error: --noise, else the file's per-row std (a diagonal covariance), else inferred
         noise = args.noise
         cov = np.diag(data.std**2) if noise is None and data.std is not None else None
-        post = sample_posterior(
-            data.dolp,
-            data.theta_i,
-            data.theta_r,
-            noise,
-            args.seed,
-            phi=data.phi,
-            sigma=args.sigma,
-            covariance=cov,
-            n_steps=args.posterior_steps,
-        )
+        with warnings.catch_warnings():
+            # kept in post.messages: said beside the estimates below, on screen and in the report
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            warnings.simplefilter("ignore", MisfitWarning)
+            post = sample_posterior(
+                data.dolp,
+                data.theta_i,
+                data.theta_r,
+                noise,
+                args.seed,
+                phi=data.phi,
+                sigma=args.sigma,
+                covariance=cov,
+                n_steps=args.posterior_steps,
+            )
         error = (
             f"--noise {args.noise:g} for every row"
             if args.noise is not None
             else "the file's std column (one standard deviation per row)"
             if cov is not None
-            else "inferred from the scatter about the model (no std column, no --noise)"
+            else "inferred from the scatter about the model (no std column, no --noise"
+            + (f"; not used: {', '.join(map(repr, data.unused))})" if data.unused else ")")
         )
+        fit_lines = _fit_check_lines(post, inferred=noise is None and cov is None)
         report = posterior_report(
             post,
             args.out,
@@ -488,7 +506,9 @@ def _fit_dolp(args) -> int:
             else ""
         )
     )
-    if not post.converged:  # the sampler has warned why; say how in the command line's words
+    for line in fit_lines:
+        print(line)
+    if not post.converged:  # the lines above say why; say how in the command line's words
         reason = post.convergence_reason
         rows, free = data.dolp.size, len(names) + (noise is None and cov is None)
         advice = []
@@ -510,6 +530,46 @@ def _fit_dolp(args) -> int:
         )
     print(f"report: {report}")
     return 0
+
+
+def _fit_check_lines(post, inferred: bool) -> list:
+    """The goodness of fit and every message of a posterior, one line each, for the fit-dolp summary and
+    the top of its report (beside the estimates they qualify).
+
+    Parameters
+    ----------
+    post : scatterlab.inversion.Posterior
+        The sampled posterior (its ``fit_check`` and ``messages``).
+    inferred : bool
+        The DOLP noise was inferred (no error given): there is no fit to test.
+
+    Returns
+    -------
+    list of str
+        ``"goodness of fit: ..."`` (when tested) and ``"warning: ..."`` lines.
+    """
+    from scatterlab.inversion.posterior import FIT_P_MIN
+
+    lines = []
+    g = getattr(post, "fit_check", None)
+    if g is not None:
+        lines.append(
+            f"goodness of fit under the stated DOLP errors: chi-square {g['chi2']:.4g} for {g['dof']} "
+            f"degrees of freedom, p = {g['p_value']:.2g}"
+            + (
+                f" < {FIT_P_MIN:g}: the data do not fit the model within their errors, the intervals "
+                "are too narrow (errors understated? a wrong angle unit or azimuth?)"
+                if g["p_value"] < FIT_P_MIN
+                else ""
+            )
+        )
+    elif inferred:
+        lines.append(
+            "goodness of fit: not tested (the DOLP noise is inferred from the scatter and absorbs any "
+            "misfit; give the error with --noise or a std_dolp column to test it)"
+        )
+    lines += [f"warning: {m}" for m in post.messages]
+    return lines
 
 
 def _add_fit_dolp(sub):
@@ -915,6 +975,10 @@ def main(argv=None) -> int:
         "fit-dolp": _fit_dolp,
         "fit-ellipsometry": _fit_ellipsometry,
     }
+    problem = _integer_option_error(args)
+    if problem is not None:
+        print(f"scatterlab: {problem}", file=sys.stderr)
+        return 2
     with warnings.catch_warnings():  # a warning is a line for the user, not a source listing
         warnings.showwarning = _show_warning
         return commands[args.command](args)

@@ -425,3 +425,120 @@ def test_shadowing_choices_are_the_models_and_are_checked_before_reading(tmp_pat
     assert "invalid choice: 'foo'" in err and "no such file" not in err
     for name in SHADOWING:
         assert f"'{name}'" in err
+
+
+def _paint_rows(std, scatter=0.0, theta=None):
+    """Specular DOLP of a paint (1.39 - 0.34j, sigma 0.3) at ``theta`` [deg], with Gaussian ``scatter``, and
+    a std column ``std``."""
+    import numpy as np
+
+    from scatterlab.inversion import model_dolp
+
+    th = np.arange(20.0, 71.0, 5.0) if theta is None else np.asarray(theta, float)
+    d = model_dolp(1.39, 0.34, 0.3, np.radians(th), np.radians(th))
+    d = d + scatter * np.random.default_rng(0).standard_normal(th.size)
+    return np.c_[th, d, np.full(th.size, std)]
+
+
+def test_fit_dolp_refuses_radians_read_as_degrees(tmp_path, capsys):
+    """Radians in a file read in degrees: a one-line error naming the column and the unit (read_dataset and
+    the scene loader refuse the same), not a report of n = 0.02 with a zero-width interval."""
+    import numpy as np
+
+    rows = _paint_rows(0.005)
+    path = _dolp_table(
+        tmp_path / "rad.csv", "theta,dolp,std_dolp", np.c_[np.radians(rows[:, 0]), rows[:, 1:]]
+    )
+    assert main(["fit-dolp", path, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "column 'theta'" in err and "read in degrees" in err and "--angle-unit rad" in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
+def test_fit_dolp_names_columns_it_does_not_use_and_lists_the_azimuths(tmp_path, capsys):
+    import numpy as np
+
+    rows = _paint_rows(0.01)
+    fast = ["--sigma", "0.3", "--posterior-steps", "200"]
+    # an error column under a name the reader does not take: said on screen and in the report
+    path = _dolp_table(tmp_path / "u.csv", "theta,dolp,uncertainty", rows)
+    assert main(["fit-dolp", path, "--out", str(tmp_path / "u"), *fast]) == 0
+    err = capsys.readouterr().err
+    assert "column 'uncertainty' not used" in err and "name it std_dolp" in err
+    assert "--column std=uncertainty" in err
+    report = (tmp_path / "u" / "report.md").read_text()
+    assert "not used: 'uncertainty'" in report and "name it std_dolp" in report
+    # any other column: named too; and the azimuths of a phi column are listed
+    table = np.c_[rows[:, 0], np.zeros(len(rows)), rows[:, 1:], np.full(len(rows), 21.0)]
+    path = _dolp_table(tmp_path / "t.csv", "theta,phi,dolp,std_dolp,temperature", table)
+    assert main(["fit-dolp", path, "--out", str(tmp_path / "t"), *fast]) == 0
+    err = capsys.readouterr().err
+    assert "note:" in err and "column 'temperature' not used" in err
+    report = (tmp_path / "t" / "report.md").read_text()
+    assert "column 'temperature' not used" in report
+    assert (
+        f"column 'phi': relative azimuths phi = phi_r - phi_i used [deg]: 0 ({len(rows)} rows)"
+        in report
+    )
+
+
+def test_fit_dolp_shows_the_misfit_and_the_goodness_of_fit_beside_the_estimates(tmp_path, capsys):
+    """A std column 10 times smaller than the scatter: the posterior's misfit message and its chi-square are
+    on screen under the estimates and in the report right under the table, once."""
+    rows = _paint_rows(0.005, scatter=0.05)
+    path = _dolp_table(tmp_path / "s.csv", "theta,dolp,std_dolp", rows)
+    argv = [
+        "fit-dolp",
+        path,
+        "--out",
+        str(tmp_path / "o"),
+        "--sigma",
+        "0.3",
+        "--posterior-steps",
+        "200",
+    ]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    lines = out.splitlines()
+    assert lines[0].startswith("n = ")
+    assert lines[1].startswith("goodness of fit under the stated DOLP errors: chi-square")
+    assert "the data do not fit the model within their errors" in lines[1]
+    assert any(
+        ln.startswith("warning: the data do not fit the model within their stated errors")
+        for ln in lines
+    )
+    report = (tmp_path / "o" / "report.md").read_text()
+    under = report.split("| parameter |")[1].split("Diagnostics:")[0]  # the table and what follows it
+    assert "Goodness of fit under the stated errors: chi-square" in under
+    assert "**the data do not fit the model within these errors**" in under
+    assert "- the data do not fit the model within their stated errors" in under
+    assert report.count("do not fit the model within their stated errors") == 1  # said once
+
+
+def test_every_seed_and_integer_option_is_named_in_its_error(tmp_path, capsys):
+    path = _dolp_table(tmp_path / "d.csv", "theta,dolp", _paint_rows(0.01)[:, :2])
+    cases = [
+        (["fit-dolp", path, "--seed", "-3"], "--seed must be a non-negative integer, got -3"),
+        (["fit-mueller", path, "--seed", "-3"], "--seed must be a non-negative integer, got -3"),
+        (
+            ["fit-mueller", path, "--posterior-steps", "-1"],
+            "--posterior-steps must be a non-negative integer",
+        ),
+        (["analyze", "x.h5", "--seed", "-1"], "--seed must be a non-negative integer, got -1"),
+        (["study", "run", "fig4", "--seed", "-1"], "--seed must be a non-negative integer, got -1"),
+        (
+            ["fit-dolp", path, "--posterior-steps", "5"],
+            "--posterior-steps must be an integer >= 20",
+        ),
+        (["analyze", "x.h5", "--iterations", "0"], "--iterations"),
+        (["characterize", "--workers", "0"], "--workers"),
+    ]
+    for argv, message in cases:
+        assert main([*argv, "--out", str(tmp_path / "o")]) == 2, argv
+        err = capsys.readouterr().err
+        assert message in err and "Traceback" not in err, (argv, err)
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(SystemExit):  # not an integer: argparse names the option
+        main(["fit-dolp", path, "--seed", "x"])
+    assert "argument --seed: invalid int value" in capsys.readouterr().err

@@ -5,7 +5,8 @@ Keys (units in the names; all optional except where noted):
 ```toml
 title = "painted aluminium and steel, 1550 nm"
 wavelength_um = 1.55                  # recorded with the results: the plates' indices below are the ones at
-                                      # this wavelength, and the optics are sampled in lambda/D (2 px per lambda/D)
+                                      # this wavelength, and the optics are sampled in lambda/D (2 px per lambda/D);
+                                      # in [0.01, 100] um, as in a dataset file (1.55e-6 or 1550 is refused)
 image_size = 128                      # pixels (square), the pupil grid is half of it
 geometry_deg = [30, 35, 40, 45, 50, 55, 60]   # specular theta_i = theta_r per acquisition (Ch. VII)
 d_over_r0 = [7.9, 12.9]               # turbulence strengths; a no-turbulence case is always included
@@ -271,6 +272,22 @@ def _finite(cfg, name, lo, hi, *, lo_open=False):
         raise ValueError(f"{name} must be in {'(' if lo_open else '['}{lo:g}, {hi:g}], got {v!r}")
 
 
+# the wavelengths a scene may have [um]: those of a dataset file (scatterlab.io.dataset), ultraviolet to
+# far infrared; a value outside is a unit mistake (metres: 1.55e-6, nanometres: 1550)
+WAVELENGTH_RANGE_UM = (0.01, 100.0)
+
+
+def _check_wavelength(v) -> None:
+    """ValueError naming ``wavelength_um`` outside :data:`WAVELENGTH_RANGE_UM` (a unit mistake)."""
+    lo, hi = WAVELENGTH_RANGE_UM
+    if not (math.isfinite(v) and lo <= v <= hi):
+        hint = "metres? nanometres? " if v > 0 else ""
+        raise ValueError(
+            f"wavelength_um must be in [{lo:g}, {hi:g}] um, got {v!r} ({hint}the key is in micrometres: "
+            "1.55 for 1.55e-6 m or 1550 nm)"
+        )
+
+
 def _check_ranges(cfg: SceneConfig) -> None:
     import numpy as np
 
@@ -289,7 +306,7 @@ def _check_ranges(cfg: SceneConfig) -> None:
         )
     if not all(math.isfinite(x) and 0 < x <= 100 for x in cfg.d_over_r0):
         raise ValueError(f"d_over_r0 entries must be in (0, 100], got {cfg.d_over_r0}")
-    _finite(cfg, "wavelength_um", 0, 1e4, lo_open=True)
+    _check_wavelength(cfg.wavelength_um)
     _finite(cfg, "photons", 0, 1e12, lo_open=True)
     _finite(cfg, "read_noise", 0, 1e6)
     _finite(cfg, "sigma_known", 1e-3, 1.5)

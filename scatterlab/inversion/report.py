@@ -204,17 +204,9 @@ def _markdown(post, name, truth, title=None, notes=()) -> str:
     lines = [f"# {title or f'Posterior: {name}'}", ""]
     if notes:
         lines += [f"- {n}" for n in notes] + [""]
-    lines += [
-        summary_table(post, truth),
-        "",
-        f"Diagnostics: {d['n_steps']} steps x {d['walkers']} walkers, burn-in {d['burn']}, "
-        f"thin {d['thin']}; tau = {np.round(d['tau'], 1).tolist()} "
-        f"(run = {d['steps_over_tau']:.0f} tau); acceptance {d['acceptance']:.2f}; "
-        f"R-hat between {d['n_ensembles']} ensembles "
-        f"{np.round(d['rhat'], 3).tolist()}; effective samples {ess}; {state}; "
-        f"{'**multimodal**' if d['multimodal'] else 'one mode'}; {d['seconds']:.1f} s.",
-        "",
-    ]
+    lines += [summary_table(post, truth), ""]
+    # what qualifies every number of the table, right under it: the fit under the stated errors and the
+    # sampler's warnings
     g = post.fit_check
     if g is not None:
         lines += [
@@ -228,7 +220,16 @@ def _markdown(post, name, truth, title=None, notes=()) -> str:
             "",
         ]
     if post.messages:
-        lines += ["Warnings:", ""] + [f"- {m}" for m in post.messages] + [""]
+        lines += ["**Warnings:**", ""] + [f"- {m}" for m in post.messages] + [""]
+    lines += [
+        f"Diagnostics: {d['n_steps']} steps x {d['walkers']} walkers, burn-in {d['burn']}, "
+        f"thin {d['thin']}; tau = {np.round(d['tau'], 1).tolist()} "
+        f"(run = {d['steps_over_tau']:.0f} tau); acceptance {d['acceptance']:.2f}; "
+        f"R-hat between {d['n_ensembles']} ensembles "
+        f"{np.round(d['rhat'], 3).tolist()}; effective samples {ess}; {state}; "
+        f"{'**multimodal**' if d['multimodal'] else 'one mode'}; {d['seconds']:.1f} s.",
+        "",
+    ]
     for kind in ("corner", "trace", "predictive"):
         lines += [f"![{kind}]({name}_{kind}.png)", ""]
     return "\n".join(lines)

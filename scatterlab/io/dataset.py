@@ -654,21 +654,23 @@ _KEYS = {
 }
 
 
-def _check_keys(flat, where) -> None:
+def _check_keys(flat, where, extra=()) -> None:
     """Refuse keys a dataset does not have (a misspelt ``read_noise`` would otherwise be ignored) and
-    files of another format or a newer version."""
+    files of another format or a newer version; ``extra`` are further keys the file may hold (a TIFF
+    sidecar's ``tiff``, ``layout``, ``truth``)."""
     import difflib
 
-    unknown = sorted(set(flat) - _KEYS)
+    allowed = _KEYS | set(extra)
+    unknown = sorted(set(flat) - allowed)
     if unknown:
         hints = [
             f"{k!r} (did you mean {close[0]!r}?)" if close else repr(k)
             for k in unknown
-            for close in [difflib.get_close_matches(k, sorted(_KEYS), n=1, cutoff=0.6)]
+            for close in [difflib.get_close_matches(k, sorted(allowed), n=1, cutoff=0.6)]
         ]
         raise ValueError(
             f"{where}: unknown key{'s' if len(unknown) > 1 else ''} {', '.join(hints)}; a dataset "
-            f"has {', '.join(sorted(_KEYS - _TRUTH_KEYS))} and truth_* keys"
+            f"has {', '.join(sorted(allowed - _TRUTH_KEYS))} and truth_* keys"
         )
     name = flat.get("format")
     if name is not None and str(np.asarray(name).reshape(()).item()) != FORMAT_NAME:
@@ -754,6 +756,7 @@ def write_dataset(
     """
     from scatterlab.io import stacks
 
+    check_write_arguments(path, ds, "write_dataset")
     suffix = Path(path).suffix.lower()
     writers = {
         ".h5": stacks.write_dataset_hdf5,
@@ -765,6 +768,39 @@ def write_dataset(
     if suffix not in writers:
         raise ValueError(f"{path}: dataset files end in {sorted(writers)}")
     return writers[suffix](path, ds, dofp_pattern=dofp_pattern, overwrite=overwrite)
+
+
+def check_write_arguments(path, ds, function: str) -> None:
+    """Refuse a dataset writer's arguments in the wrong order or of the wrong kind.
+
+    Parameters
+    ----------
+    path : object
+        What was given as the file path (a str or os.PathLike is expected).
+    ds : object
+        What was given as the dataset (a :class:`PolarimetricDataset` is expected).
+    function : str
+        The writer's name, for the message.
+
+    Returns
+    -------
+    None
+        Raises or does nothing.
+
+    Raises
+    ------
+    TypeError
+        Naming the argument: ``path`` first, ``ds`` second (swapped arguments are said to be so).
+    """
+    import os
+
+    usage = f"{function}(path, ds): the first argument is the file path, the second the dataset"
+    if isinstance(path, PolarimetricDataset) and isinstance(ds, (str, os.PathLike)):
+        raise TypeError(f"{usage}; got them the other way round: call {function}({ds!r}, ds)")
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"{usage}; path must be a str or Path, got {type(path).__name__}")
+    if not isinstance(ds, PolarimetricDataset):
+        raise TypeError(f"{usage}; ds must be a PolarimetricDataset, got {type(ds).__name__}")
 
 
 def with_pixel_mask(

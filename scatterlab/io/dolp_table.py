@@ -12,8 +12,10 @@ deviation::
 A single angle column (``theta``) means specular geometry, ``theta_i = theta_r``. An optional azimuth
 column (``phi``, the relative azimuth ``phi_r - phi_i``; default 180 deg, observation in the plane of
 incidence) gives out-of-plane geometries. Angles in degrees unless ``angle_unit="rad"`` (or a unit in the
-header: ``theta_i [rad]``, ``theta_i_deg``). Column names follow :mod:`scatterlab.io.table`: case, spaces
-and underscores do not matter.
+header: ``theta_i [rad]``, ``theta_i_deg``); polar angles that are all below pi/2 "degrees" are radians
+read as degrees and refused. Column names follow :mod:`scatterlab.io.table`: case, spaces and underscores
+do not matter. A column the reader does not use is named in the notes (and warned about when its name
+looks like an error column, ``uncertainty``, ``sd``, ``error``, while the table has no ``std_dolp``).
 """
 
 from __future__ import annotations
@@ -29,7 +31,6 @@ from scatterlab.io.table import (
     read_table,
     signed_polar,
     warn_if_header_disagrees,
-    warn_if_radians,
 )
 
 __all__ = ["DolpData", "read_dolp_table", "write_dolp_table"]
@@ -54,6 +55,35 @@ ALIASES = {
 }
 
 
+# normalised names of columns that look like a DOLP error but are not read as one (the std column's names
+# are ALIASES["std"]): said so, with the name the reader expects
+ERROR_LIKE = {
+    "uncertainty",
+    "uncertaintydolp",
+    "dolpuncertainty",
+    "unc",
+    "u",
+    "sd",
+    "sigma",
+    "sigmadolp",
+    "err",
+    "error",
+    "errordolp",
+    "dolperror",
+    "stderr",
+    "stdev",
+    "stddev",
+    "stdevdolp",
+    "stddevdolp",
+    "dolpstdev",
+    "dolpstddev",
+    "ddolp",
+    "deltadolp",
+    "noise",
+}
+UNUSED_NOTE = "not used by the reader"
+
+
 @dataclass
 class DolpData:
     """Measured DOLP at M geometries.
@@ -70,6 +100,10 @@ class DolpData:
         Its standard deviation, when the file gives one.
     source : str
     notes : list of str
+        How the file was read: the geometry assumed or read (the azimuths), signed angles, columns
+        mapped by the user or not used.
+    unused : list of str
+        The file's columns the reader did not use, as named in its header.
     """
 
     theta_i: np.ndarray
@@ -79,6 +113,7 @@ class DolpData:
     std: np.ndarray | None = None
     source: str = ""
     notes: list = field(default_factory=list)
+    unused: list = field(default_factory=list)
 
     @property
     def specular(self) -> bool:
@@ -111,8 +146,17 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
     ValueError
         Naming the file, line and column: missing DOLP or angle columns, non-numeric or non-finite cells,
         polar angles beyond 90 deg (a negative one is read as the other side of the normal: |theta|,
-        the azimuth + 180 deg), a DOLP outside [-0.05, 1.05] (noise aside, a DOLP is in
-        [0, 1]), a standard deviation <= 0, fewer than two rows.
+        the azimuth + 180 deg), polar angles read in degrees that are all below pi/2 (radians read as
+        degrees: at such angles the DOLP is near 0 and determines nothing), a DOLP outside [-0.05, 1.05]
+        (noise aside, a DOLP is in [0, 1]), a standard deviation <= 0, fewer than two rows.
+
+    Warns
+    -----
+    UserWarning
+        A header comment stating another angle unit; a column the reader does not use whose name looks
+        like the DOLP's error (``uncertainty``, ``sd``, ``error``) when there is no std column: the
+        error would otherwise be inferred from the scatter without a word (every unused column is named
+        in ``notes`` and ``unused``).
     """
     f = angle_factor(angle_unit)
     unit = "deg" if f != 1.0 else "rad"
@@ -162,7 +206,7 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
                 f"|theta| ({how})"
             )
     theta_i, theta_r = (folded[0], folded[0]) if len(polar) == 1 else folded
-    warn_if_radians(table.path, (theta_i, theta_r), f, stacklevel=2)
+    _refuse_radians(table, polar, f)
     pi = col("phi", False)
     phi = np.full(theta_i.shape, np.pi) if pi is None else angles(pi)
     if pi is not None:
@@ -176,6 +220,8 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
             )
     if pi is None:
         notes.append("no azimuth column: phi = 180 deg (observation in the plane of incidence)")
+    else:
+        notes.append(_azimuth_note(table, pi, f))
     phi = np.where(turn, np.mod(phi + np.pi, 2 * np.pi), phi)
     di = col("dolp")
     dolp = table.values[:, di]
@@ -198,7 +244,71 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
     if dolp.size < 2:
         raise ValueError(f"{table.path}: {dolp.size} row; n and kappa need at least two geometries")
     notes += mapped_columns_note(columns)
-    return DolpData(theta_i, theta_r, phi, dolp, std, str(path), notes)
+    used = {i for i, _ in polar} | {di} | {i for i in (pi, si) if i is not None}
+    unused = [name for i, name in enumerate(table.names) if i not in used]
+    if unused:
+        note = _unused_note(table, used, si is None)
+        if si is None and any(table.keys[table.names.index(name)] in ERROR_LIKE for name in unused):
+            import warnings
+
+            warnings.warn(f"{table.path}: {note}", UserWarning, stacklevel=2)
+        else:
+            notes.append(note)
+    return DolpData(theta_i, theta_r, phi, dolp, std, str(path), notes, unused)
+
+
+def _refuse_radians(table, polar, factor: float) -> None:
+    """ValueError when every polar angle of a table read in degrees is below pi/2 degrees.
+
+    Radians read as degrees look like that (60 deg written 1.047 is read as 1.047 deg); there the DOLP is
+    below 1e-3 and determines nothing, so the fit would report nonsense (``scatterlab.io.dataset`` and the
+    scene loader refuse the same).
+    """
+    if factor == 1.0:
+        return
+    values = np.abs(np.concatenate([table.values[:, i] for i, _ in polar]))
+    if values.max() < np.pi / 2 + 1e-9:
+        names = " and ".join(repr(table.names[i]) for i, _ in polar)
+        raise ValueError(
+            f"{table.path}, column {names}: the polar angles are read in degrees and are all below "
+            f"{np.pi / 2:.4f} deg (largest {values.max():g}), where the DOLP is near 0 and determines "
+            "nothing: radians read as degrees? Write the angles in degrees, or read the file with "
+            "angle_unit='rad' (--angle-unit rad on the command line)"
+        )
+
+
+def _azimuth_note(table, i: int, factor: float) -> str:
+    """The azimuths of column ``i`` in degrees, as the file gives them, so that a wrong one shows."""
+    deg = table.values[:, i] * factor * 180 / np.pi
+    values, counts = np.unique(np.round(deg, 9), return_counts=True)
+    if values.size <= 12:
+        listed = ", ".join(f"{v:g} ({c} row{'s' if c > 1 else ''})" for v, c in zip(values, counts))
+    else:
+        listed = f"{values.size} values from {values.min():g} to {values.max():g}"
+    note = (
+        f"column {table.names[i]!r}: relative azimuths phi = phi_r - phi_i used [deg]: {listed}; 180 is "
+        "observation in the plane of incidence, 0 back towards the source"
+    )
+    if factor != 1.0 and np.any(np.isclose(np.abs(deg), np.pi, atol=2e-3)):
+        note += "; 3.14 deg is pi radians read as degrees? (every angle column takes the same unit)"
+    return note
+
+
+def _unused_note(table, used, no_std: bool) -> str:
+    """The columns the reader does not use, and the name it expects for one that looks like an error."""
+    unused = [i for i in range(len(table.names)) if i not in used]
+    names = ", ".join(repr(table.names[i]) for i in unused)
+    note = f"column{'s' if len(unused) > 1 else ''} {names} {UNUSED_NOTE}"
+    errors = [table.names[i] for i in unused if table.keys[i] in ERROR_LIKE]
+    if errors:
+        name = errors[0]
+        note += (
+            f"; if {name!r} is the DOLP's standard deviation, name it std_dolp (or std), or map it with "
+            f"columns={{'std': {name!r}}} (--column std={name} on the command line)"
+        )
+        if no_std:
+            note += ": the table has no std column, so no DOLP error is read from it"
+    return note
 
 
 def write_dolp_table(

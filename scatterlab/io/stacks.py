@@ -26,7 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
-from scatterlab.io.dataset import FORMAT_NAME, PolarimetricDataset, from_flat, to_flat
+from scatterlab.io.dataset import (
+    FORMAT_NAME,
+    PolarimetricDataset,
+    _check_keys,
+    check_write_arguments,
+    from_flat,
+    to_flat,
+)
 
 __all__ = [
     "read_dataset_hdf5",
@@ -150,6 +157,7 @@ def _file_format(name: str, what: str, write_flat, read_flat):
     :func:`~scatterlab.io.dataset.to_flat`."""
 
     def write(path, ds: PolarimetricDataset, *, dofp_pattern=None, overwrite: bool = False) -> Path:
+        check_write_arguments(path, ds, f"write_dataset_{name}")
         return write_flat(path, to_flat(ds, dofp_pattern=dofp_pattern), overwrite)
 
     def read(path) -> PolarimetricDataset:
@@ -208,6 +216,7 @@ def write_dataset_tiff(
 
     from scatterlab.runtime.results import atomic_write_bytes, write_npz, write_text
 
+    check_write_arguments(path, ds, "write_dataset_tiff")
     path = Path(path)
     flat = to_flat(ds, dofp_pattern=dofp_pattern)
     key = "raw" if "raw" in flat else "counts"
@@ -243,6 +252,10 @@ def write_dataset_tiff(
     atomic_write_bytes(path, buf.getvalue(), overwrite=overwrite)
     write_text(path.with_suffix(".toml"), "\n".join(lines) + "\n", overwrite=overwrite)
     return path
+
+
+# the keys a TIFF sidecar holds besides a dataset's own
+_SIDECAR_KEYS = ("tiff", "layout", "truth")
 
 
 def _sidecar(path: Path) -> Path:
@@ -356,6 +369,14 @@ def read_dataset_tiff(path) -> PolarimetricDataset:
         meta = tomllib.loads(side.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"{side}: not a valid TOML sidecar ({exc})") from None
+    scene = sorted({"plates", "geometry_deg", "image_size", "d_over_r0"} & set(meta))
+    if scene and "theta_deg" not in meta:
+        raise ValueError(
+            f"{side}: expected a dataset, but its keys {', '.join(scene)} are those of a scene description "
+            "(run it with `scatterlab characterize`)"
+        )
+    # a misspelt key first: without it (theta_degs for theta_deg) the page count below would be wrong
+    _check_keys(meta, str(side), extra=_SIDECAR_KEYS)
     layout = meta.pop("layout", "channels")
     if layout not in ("channels", "dofp"):
         raise ValueError(f"{side}: layout must be 'channels' or 'dofp', got {layout!r}")

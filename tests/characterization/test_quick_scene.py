@@ -88,6 +88,14 @@ def test_a_named_metal_without_its_index_is_flagged(tmp_path):
 
 def test_a_wavelength_in_nanometres_is_flagged(tmp_path):
     p = tmp_path / "scene.toml"
-    p.write_text("wavelength_um = 1550\n")
+    p.write_text("wavelength_um = 50\n")  # far infrared, or 50 nm: allowed, and said
     with pytest.warns(UserWarning, match="nanometres given as micrometres"):
+        load_scene(p)
+    # outside the dataset reader's [0.01, 100] um: nanometres or metres in a micrometre key
+    for value in ("1550", "1.55e-6", "0", "-1.55"):
+        p.write_text(f"wavelength_um = {value}\n")
+        with pytest.raises(ValueError, match=r"wavelength_um must be in \[0.01, 100\] um"):
+            load_scene(p)
+    p.write_text("wavelength_um = 1.55e-6\n")
+    with pytest.raises(ValueError, match=r"got 1.55e-06 \(metres\? nanometres\?"):
         load_scene(p)

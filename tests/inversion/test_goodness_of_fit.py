@@ -168,7 +168,7 @@ def test_the_posterior_report_gives_the_goodness_of_fit_and_the_warning():
     text = _markdown(post, "paint", PAINT)
     assert f"chi-square {post.fit_check['chi2']:.2f} for 9 degrees of freedom" in text
     assert "**the data do not fit the model within these errors**" in text
-    assert "Warnings:" in text and "do not fit the model within their stated errors" in text
+    assert "**Warnings:**" in text and "do not fit the model within their stated errors" in text
 
 
 def test_a_problem_without_light_is_refused_before_the_batch_runs():

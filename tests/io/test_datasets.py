@@ -259,6 +259,21 @@ def _sidecar_stack(tmp_path, dofp=False):
             r"'read_noise' \(did you mean 'read_noise_e'\?\)",
         ),
         (False, "format_version = 1", "format_version = 7", "reads version 1 to 1"),
+        # a misspelt key is named before the pages are counted (not "8 TIFF pages for 0 geometries")
+        (
+            False,
+            "theta_deg = ",
+            "theta_degs = ",
+            r"unknown key 'theta_degs' \(did you mean 'theta_deg'\?\)",
+        ),
+        (
+            True,
+            "theta_deg = ",
+            "theta_degs = ",
+            r"unknown key 'theta_degs' \(did you mean 'theta_deg'\?\)",
+        ),
+        (False, 'layout = "', 'layuot = "', r"unknown key 'layuot' \(did you mean 'layout'\?\)"),
+        (False, 'tiff = "', 'tif = "', r"unknown key 'tif' \(did you mean 'tiff'\?\)"),
     ],
 )
 def test_bad_sidecars_name_the_problem(tmp_path, dofp, old, new, message):
@@ -475,3 +490,28 @@ def test_review_cases_of_bad_pixels_and_saturation():
             full_well=4e4,
         )
     assert given.full_well == 4e4 and given.valid_pixels() is None
+
+
+def test_write_dataset_with_its_arguments_swapped_says_which_is_which(tmp_path):
+    """write_dataset(ds, "x.npz") -- the dataset first -- names the arguments, not pathlib's TypeError."""
+    from scatterlab.io import write_dataset_hdf5, write_dataset_npz
+
+    ds = small(truth=False)
+    for write, name in (
+        (write_dataset, "write_dataset"),
+        (write_dataset_npz, "write_dataset_npz"),
+        (write_dataset_hdf5, "write_dataset_hdf5"),
+        (write_dataset_tiff, "write_dataset_tiff"),
+    ):
+        with pytest.raises(
+            TypeError,
+            match=rf"{name}\(path, ds\): the first argument is the file path.*"
+            "other way round",
+        ):
+            write(ds, str(tmp_path / "x.npz"))
+    with pytest.raises(TypeError, match="ds must be a PolarimetricDataset, got str"):
+        write_dataset(tmp_path / "x.npz", "y.npz")
+    with pytest.raises(TypeError, match="path must be a str or Path, got int"):
+        write_dataset(3, ds)
+    assert not list(tmp_path.iterdir())
+    assert write_dataset(tmp_path / "x.npz", ds).exists()

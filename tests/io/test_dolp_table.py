@@ -14,14 +14,20 @@ def _write(path, theta, dolp):
     return path
 
 
-def test_radians_read_as_degrees_are_pointed_out(tmp_path):
-    # the same specular angles written in radians: read as degrees, every one is below pi/2 "deg"
+def test_radians_read_as_degrees_are_refused(tmp_path):
+    # the same specular angles written in radians: read as degrees, every one is below pi/2 "deg", where
+    # the DOLP is near 0 and the fit would report nonsense (n = 0.02): refused, as read_dataset does
     theta = np.radians([30.0, 45.0, 60.0])
     path = _write(tmp_path / "rad.csv", theta, [0.3, 0.5, 0.7])
-    with pytest.warns(UserWarning, match="radians read as degrees") as record:
-        data = read_dolp_table(path)
-    assert record[0].filename == __file__  # points at the caller, not the reader
-    np.testing.assert_allclose(data.theta_i, np.radians(theta))  # read as stated: degrees
+    with pytest.raises(
+        ValueError,
+        match=r"column 'theta': the polar angles are read in degrees .*radians read as degrees",
+    ):
+        read_dolp_table(path)
+    both = tmp_path / "both.csv"
+    both.write_text("theta_i,theta_r,dolp\n0.5,0.6,0.3\n0.7,0.8,0.5\n")
+    with pytest.raises(ValueError, match=r"column 'theta_i' and 'theta_r'.*angle_unit='rad'"):
+        read_dolp_table(both)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         data = read_dolp_table(path, angle_unit="rad")
@@ -103,11 +109,13 @@ def test_a_header_that_states_another_unit_or_convention_is_pointed_out(tmp_path
     th = np.radians([30.0, 50.0, 70.0])
     dolp = DolpData(th, th, np.full(3, np.pi), np.array([0.3, 0.5, 0.7]))
     path = write_dolp_table(tmp_path / "d.csv", dolp, angle_unit="rad")
-    with pytest.warns(UserWarning) as record:
+    with (
+        pytest.warns(UserWarning) as record,
+        pytest.raises(ValueError, match="radians read as degrees"),
+    ):
         read_dolp_table(path)
     said = " ".join(str(w.message) for w in record)
     assert "its header states angles in rad but they are read as deg" in said
-    assert "radians read as degrees" in said
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         read_dolp_table(path, angle_unit="rad")
@@ -158,3 +166,46 @@ def test_decimal_commas_and_spreadsheet_leftovers(tmp_path):
         ValueError, match=r"line 3, column 'dolp': '' is not a number \(an empty cell"
     ):
         read_dolp_table(excel)
+
+
+def test_unused_columns_are_named_and_an_error_column_under_another_name_is_warned_of(tmp_path):
+    """A column the reader does not use is named in the notes; one that looks like the DOLP's error
+    (uncertainty, sd, error) while the table has no std column is warned of with the name expected, since
+    the error would otherwise be inferred without a word."""
+    rows = "30,0.3,0.01,20\n45,0.5,0.01,21\n60,0.7,0.01,22\n"
+    for name in ("uncertainty", "sd", "error", "err", "Sigma"):
+        path = tmp_path / f"{name}.csv"
+        path.write_text(f"theta,dolp,{name},temperature\n{rows}")
+        with pytest.warns(
+            UserWarning, match=rf"columns '{name}', 'temperature' not used.*name it std_dolp"
+        ):
+            data = read_dolp_table(path)
+        assert data.std is None and data.unused == [name, "temperature"]
+    # with a std column, an extra one is only noted
+    path = tmp_path / "t.csv"
+    path.write_text(f"theta,dolp,std_dolp,temperature\n{rows}")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        data = read_dolp_table(path)
+    assert data.unused == ["temperature"] and data.std is not None
+    assert any("column 'temperature' not used" in note for note in data.notes)
+    path.write_text(
+        f"theta,dolp,std_dolp\n{rows.replace(',20', '').replace(',21', '').replace(',22', '')}"
+    )
+    data = read_dolp_table(path)
+    assert data.unused == [] and not any("not used" in note for note in data.notes)
+
+
+def test_the_azimuths_read_are_listed(tmp_path):
+    path = tmp_path / "phi.csv"
+    path.write_text("theta,phi,dolp\n30,0,0.3\n45,0,0.5\n60,90,0.7\n")
+    data = read_dolp_table(path)
+    (note,) = [n for n in data.notes if "azimuth" in n]
+    assert "column 'phi'" in note and "[deg]: 0 (2 rows), 90 (1 row)" in note
+    path.write_text("theta,phi,dolp\n30,3.14159,0.3\n45,3.14159,0.5\n")
+    (note,) = [n for n in read_dolp_table(path).notes if "azimuth" in n]
+    assert "3.14159 (2 rows)" in note and "pi radians read as degrees?" in note
+    rad = tmp_path / "rad.csv"
+    rad.write_text("theta,phi,dolp\n0.5,3.14159265,0.3\n0.8,1.5707963,0.5\n")
+    (note,) = [n for n in read_dolp_table(rad, angle_unit="rad").notes if "azimuth" in n]
+    assert "[deg]: 90 (1 row), 180 (1 row)" in note and "read as degrees" not in note
