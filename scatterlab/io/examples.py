@@ -34,6 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
+from scatterlab._checks import as_rng
+
 __all__ = ["write_examples", "simulate_painted_plate", "SEED"]
 
 SEED = 20101210
@@ -77,7 +79,7 @@ def simulate_painted_plate(
     from scatterlab.io.dataset import Optics, PolarimetricDataset, Truth
 
     seed = rng if isinstance(rng, (int, np.integer)) else "given"
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     # simulated exactly as the main job's acquisition stage does (one code path)
     cfg = SceneConfig(image_size=n, photons=photons, read_noise=read_noise).validate()
     plate = Plate("aluminium", ALUMINIUM.real, -ALUMINIUM.imag, PAINT.real, -PAINT.imag, 0.3, 0.3)
