@@ -401,7 +401,7 @@ def test_fit_ellipsometry_column_and_bad_file(tmp_path, capsys):
     assert "or a Mueller element" in capsys.readouterr().err
     assert main(["fit-ellipsometry", str(tmp_path / "none.csv")]) == 2
     assert "no such file" in capsys.readouterr().err
-    # radians read as degrees: said on screen and kept in the report
+    # radians read as degrees: refused on screen, naming the option, and no report written
     lines = [x for x in example.read_text().splitlines() if x and not x.startswith("#")]
     rows = [x.split(",") for x in lines[1:]]
     rad = "\n".join(
@@ -409,9 +409,9 @@ def test_fit_ellipsometry_column_and_bad_file(tmp_path, capsys):
     )
     (tmp_path / "rad.csv").write_text(rad + "\n")
     argv = ["fit-ellipsometry", str(tmp_path / "rad.csv"), "--out", str(tmp_path / "r")]
-    assert main(argv) == 0
-    assert "radians read as degrees" in capsys.readouterr().err
-    assert "radians read as degrees" in (tmp_path / "r" / "report.md").read_text()
+    assert main(argv) == 2
+    assert "--angle-unit rad" in capsys.readouterr().err
+    assert not (tmp_path / "r" / "report.md").exists()
 
 
 def test_shadowing_choices_are_the_models_and_are_checked_before_reading(tmp_path, capsys):
@@ -509,7 +509,9 @@ def test_fit_dolp_shows_the_misfit_and_the_goodness_of_fit_beside_the_estimates(
         for ln in lines
     )
     report = (tmp_path / "o" / "report.md").read_text()
-    under = report.split("| parameter |")[1].split("Diagnostics:")[0]  # the table and what follows it
+    under = report.split("| parameter |")[1].split("Diagnostics:")[
+        0
+    ]  # the table and what follows it
     assert "Goodness of fit under the stated errors: chi-square" in under
     assert "**the data do not fit the model within these errors**" in under
     assert "- the data do not fit the model within their stated errors" in under

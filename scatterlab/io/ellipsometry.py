@@ -35,10 +35,10 @@ from scatterlab.io.table import (
     length_factor,
     mapped_columns_note,
     read_table,
+    refuse_radians_as_degrees,
     signed_polar,
     time_convention_flip,
     warn_if_header_disagrees,
-    warn_if_radians,
     wavelength_column,
 )
 
@@ -146,7 +146,7 @@ def read_ellipsometry(
     # a signed angle of incidence is the mirror geometry, whose in-plane block (m12, m22, m33, m34) is
     # the same (R M R with R = diag(1, 1, -1, -1) leaves it): |theta|
     theta, turned = signed_polar(table, ai, table.values[:, ai] * opt.angle, opt.angle, "angle")
-    warn_if_radians(table.path, (theta,), opt.angle, stacklevel=2)
+    refuse_radians_as_degrees(table.path, (theta,), opt.angle)
     wavelength = _wavelength(table, columns, opt.length)
     E, S = _elements(table, theta.size, opt.tolerance, columns)
     _warn_if_m12_negative(table.path, E[:, 0], None if S is None else S[:, 0])

@@ -57,9 +57,9 @@ from scatterlab.io.table import (
     length_factor,
     mapped_columns_note,
     read_table,
+    refuse_radians_as_degrees,
     time_convention_flip,
     warn_if_header_disagrees,
-    warn_if_radians,
     wavelength_column,
 )
 
@@ -291,7 +291,7 @@ def _angles(table, columns, opt):
             )
         else:
             phi_i = table.values[:, pi_] * f
-    warn_if_radians(table.path, (theta_i, theta_r), f, stacklevel=3)
+    refuse_radians_as_degrees(table.path, (theta_i, theta_r), f)
     for name, idx, v in (("theta_i", ti, theta_i), ("theta_r", tr, theta_r)):
         bad = np.abs(v) > np.pi / 2 + 1e-12
         if np.any(bad):

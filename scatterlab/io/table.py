@@ -91,11 +91,13 @@ def angle_factor(unit: str, what: str = "angle_unit") -> float:
     return ANGLE_UNITS[_unit(unit, ANGLE_UNITS, what)]
 
 
-def warn_if_radians(path, polar, factor: float, stacklevel: int = 2) -> None:
-    """Warn when every polar angle of a file read in degrees is below pi/2 degrees.
+def refuse_radians_as_degrees(path, polar, factor: float) -> None:
+    """Refuse a file read in degrees whose every polar angle is below pi/2 degrees.
 
     Radians read as degrees look like that: a 90 deg incidence, written 1.5708, would be read as
-    1.57 deg. The reader carries on (a measurement at grazing-free tiny angles is possible).
+    1.57 deg, and every fit of such a file is wrong. No goniometric or ellipsometric measurement lies
+    wholly within 1.57 deg of the normal, so the reader stops (as the dataset and DOLP-table readers
+    do) and names the option.
 
     Parameters
     ----------
@@ -104,26 +106,25 @@ def warn_if_radians(path, polar, factor: float, stacklevel: int = 2) -> None:
     polar : sequence of ndarray
         Polar angles as read [rad].
     factor : float
-        The file's angle unit in rad (1.0 for radians: no warning).
-    stacklevel : int
-        ``warnings.warn``'s, counted from the reader that calls this.
+        The file's angle unit in rad (1.0 for radians: nothing to check).
 
     Returns
     -------
     None
-        Warns (``UserWarning``) or does nothing.
-    """
-    import warnings
 
+    Raises
+    ------
+    ValueError
+        Every polar angle below pi/2 degrees in a file read in degrees.
+    """
     if factor == 1.0:
         return
     largest = max(float(np.max(np.abs(v))) for v in polar)
     if largest < np.radians(np.pi / 2 + 1e-9):
-        warnings.warn(
-            f"{path}: every polar angle is below {np.pi / 2:.4f} deg: radians read as degrees? "
-            "(angle_unit='rad', or --angle-unit rad on the command line)",
-            UserWarning,
-            stacklevel=stacklevel + 1,
+        raise ValueError(
+            f"{path}: every polar angle is below {np.pi / 2:.4f} deg, read in degrees: radians read as "
+            "degrees? Give the angles in degrees, or read the file with angle_unit='rad' (--angle-unit "
+            "rad on the command line)"
         )
 
 

@@ -74,12 +74,12 @@ def test_signed_in_plane_angles_are_the_other_side_of_the_normal(tmp_path):
     np.testing.assert_allclose(data.phi, np.pi)
 
 
-def test_ellipsometry_in_radians_read_as_degrees_is_pointed_out(tmp_path):
+def test_ellipsometry_in_radians_read_as_degrees_is_refused(tmp_path):
     from scatterlab.io import read_ellipsometry
 
     path = tmp_path / "e.csv"
     path.write_text("theta,m12,m22,m33,m34\n0.5,0.1,0.9,0.8,0.1\n0.7,0.1,0.9,0.8,0.1\n")
-    with pytest.warns(UserWarning, match="radians read as degrees"):
+    with pytest.raises(ValueError, match="radians read as degrees"):
         read_ellipsometry(path)
     with warnings.catch_warnings():
         warnings.simplefilter("error")

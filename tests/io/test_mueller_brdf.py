@@ -174,11 +174,11 @@ def test_units_and_normalised_only(tmp_path):
 
 def test_radians_read_as_degrees_are_pointed_out(tmp_path):
     """A file in radians without a stated unit, read as degrees: every polar angle is then below
-    pi / 2 "degrees", which no goniometric measurement is -- a warning names the option."""
+    pi / 2 "degrees", which no goniometric measurement is -- refused, naming the option."""
     path = write_mueller_brdf(tmp_path / "r.csv", model_data(normalised=True), angle_unit="rad")
     lines = [x for x in path.read_text().splitlines() if "angles in rad" not in x]
     path.write_text("\n".join(lines) + "\n")
-    with pytest.warns(UserWarning, match="radians read as degrees.*angle_unit='rad'"):
+    with pytest.raises(ValueError, match="radians read as degrees.*angle_unit='rad'"):
         read_mueller_brdf(path)
     import warnings
 
