@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from scatterlab.deconvolution.priors import _prior_set
+
 __all__ = ["classification_errors", "classify_dolp", "classify_unmixing"]
 
 
@@ -69,30 +71,50 @@ def classify_dolp(dolp, priors) -> np.ndarray:
 
     Parameters
     ----------
-    dolp : array_like, any shape
-        Degree of linear polarization per pixel, in [0, 1] (finite: a pixel without light has no class).
-    priors : sequence of SuperGaussianPrior
-        The DOLP priors (at least one).
+    dolp : array_like or numpy masked array, any shape
+        Degree of linear polarization per pixel (dimensionless, nominally in [0, 1]). A pixel without light
+        has no class: pass it masked, as :func:`scatterlab.imaging.dolp_aop_from_stokes` returns DOLP images
+        (masked pixels get class -1 whatever value lies under the mask); the unmasked values, and all the
+        values of a plain array, must be finite.
+    priors : str or sequence of SuperGaussianPrior
+        The DOLP priors (at least one), or the key of a set in ``PRIOR_SETS`` (``"ch5"``, ``"ch6"``, ``"ch7"``).
 
     Returns
     -------
     ndarray of int, shape of ``dolp``
-        Index into ``priors`` of the prior with the largest density at each pixel.
+        Index into ``priors`` of the prior with the largest density at each pixel; -1 where ``dolp`` is
+        masked (no class, as in :func:`classify_unmixing`).
+
+    Raises
+    ------
+    ValueError
+        ``priors`` empty, an unknown key or not priors; an unmasked ``dolp`` value NaN or infinite.
     """
-    P = np.asarray(dolp, float)
+    priors = _prior_set(priors, "priors")
     if not priors:
-        raise ValueError("priors must list at least one SuperGaussianPrior")
+        raise ValueError(
+            "priors must list at least one SuperGaussianPrior (or name a set of PRIOR_SETS)"
+        )
+    masked = np.ma.getmaskarray(dolp) if np.ma.isMaskedArray(dolp) else None
+    P = np.asarray(np.ma.getdata(dolp), float)
+    if masked is not None:
+        P = np.where(masked, 0.0, P)  # any finite value: the label is replaced below
     bad = ~np.isfinite(P)
     if bad.any():  # NaN is a pixel without light: no class, not the first prior's
         raise ValueError(
-            f"dolp must be finite: {int(bad.sum())} pixel(s) are NaN or inf (no light); mask them, "
-            "or give them a DOLP with numpy.nan_to_num"
+            f"dolp must be finite: {int(bad.sum())} pixel(s) are NaN or inf (no light, or bad "
+            "values). Pass dolp as a numpy masked array with them masked "
+            "(numpy.ma.masked_invalid(dolp); imaging.dolp_aop_from_stokes returns one) and they get "
+            "class -1, or give them a DOLP with numpy.nan_to_num"
         )
     with np.errstate(over="ignore"):
         logs = np.stack(
             [np.nan_to_num(pr.log_pdf(P), nan=-np.inf, neginf=-np.inf) for pr in priors]
         )
-    return np.argmax(logs, axis=0)
+    labels = np.argmax(logs, axis=0)
+    if masked is not None:
+        labels = np.where(masked, -1, labels)
+    return labels
 
 
 def classify_unmixing(
@@ -122,11 +144,13 @@ def classify_unmixing(
     Parameters
     ----------
     s0 : array_like, shape (H, W)
-        Irradiance [photo-electrons].
+        Irradiance [photo-electrons]; NaN or masked (numpy masked array) where unmeasured.
     dolp : array_like, shape (H, W)
-        Signed DOLP :math:`S_1/S_0` (the geometry fixes the angle of polarization); NaN where unmeasured.
+        Signed DOLP :math:`S_1/S_0` (the geometry fixes the angle of polarization); NaN or masked where
+        unmeasured.
     classes : array_like of int, shape (H, W)
-        The classification to refine (for instance :func:`classify_dolp`'s); -1 = unclassified, kept.
+        The classification to refine (for instance :func:`classify_dolp`'s); -1 (or masked) = unclassified,
+        kept.
     purest : float
         Fraction of each class whose median is its material's Stokes vector, in (0, 1].
     iterations : int
@@ -137,9 +161,10 @@ def classify_unmixing(
     ndarray of int, shape (H, W)
         The refined classes (the labels of ``classes``; -1 where ``classes`` is -1 or the pixel unmeasured).
     """
-    s0 = np.asarray(s0, float)
-    P = np.asarray(dolp, float)
-    lab = np.asarray(classes)
+    # masked pixels of numpy masked arrays (imaging's DOLP images) are unmeasured, as NaN ones are
+    s0 = np.ma.filled(np.ma.asarray(s0, float), np.nan)
+    P = np.ma.filled(np.ma.asarray(dolp, float), np.nan)
+    lab = np.ma.filled(np.ma.asarray(classes), -1)
     if s0.shape != P.shape or s0.shape != lab.shape or s0.ndim != 2:
         raise ValueError(
             f"s0 {s0.shape}, dolp {P.shape} and classes {lab.shape} must be 2-D images of one shape"

@@ -71,7 +71,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from scatterlab._checks import as_count, as_positive
-from scatterlab.deconvolution.priors import _dolp_update, map_objective
+from scatterlab.deconvolution.priors import _dolp_update, _prior_set, map_objective
 from scatterlab.deconvolution.psf_update import PupilPhasePSF, gerchberg_saxton, resample_psf
 from scatterlab.polarization import dolp as stokes_dolp
 from scatterlab.polarization import signed_dolp
@@ -159,14 +159,20 @@ class PolarizationOptions:
         the AOP of the least-squares Stokes images of the data).
     estimate_aop : estimate a per-pixel AOP (LeMaster and Cain's M-step, Sec. 3.3.2) instead of keeping
         ``aop`` -- for geometries that do not fix it (off the specular plane, polarized sources).
-    priors : tuple of SuperGaussianPrior, optional -- one: MAP DOLP; several: per-pixel classification.
+    priors : tuple of SuperGaussianPrior, optional -- one: MAP DOLP; several: per-pixel classification. A key
+        of ``PRIOR_SETS`` (``"ch5"``, ``"ch6"``, ``"ch7"``, as scene files and the command line name them) or a
+        single prior is taken for its tuple; anything else raises ValueError.
     prior_weight : weight of the log prior (>= 0).
     """
 
     aop: object = None
     estimate_aop: bool = False
-    priors: tuple | None = None
+    priors: tuple | str | None = None
     prior_weight: float = 1.0
+
+    def __post_init__(self):
+        if self.priors is not None:
+            object.__setattr__(self, "priors", _prior_set(self.priors, "priors"))
 
 
 @dataclass(frozen=True)
@@ -483,7 +489,13 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
     if d.ndim != 3:
         raise ValueError(f"data must have shape (K, H, W), got {d.shape}")
     if not np.all(np.isfinite(d)):
-        raise ValueError("data must be finite (mark missing pixels with 0 photons)")
+        bad = int((~np.all(np.isfinite(d), axis=0)).sum())
+        raise ValueError(
+            f"data must be finite: {bad} pixel(s) hold NaN or inf. Leave missing pixels out with "
+            "mask=... (a boolean (H, W) array, False there, e.g. numpy.isfinite(data).all(axis=0)) "
+            "and set them to any finite value; 0 photons without the mask would read as a black "
+            "spot of DOLP 0, which the classification takes for metal"
+        )
     th = np.asarray(angles, float).ravel()
     K = d.shape[0]
     if th.size != K:
@@ -911,7 +923,8 @@ def blind_deconvolve(
     Parameters
     ----------
     data : array (K, H, W) [photo-electrons] -- negative values (read noise after dark subtraction) are
-        clipped at 0 for the Poisson model; NaN is not allowed (use 0 and it contributes nothing).
+        clipped at 0 for the Poisson model; NaN is not allowed: give missing pixels any finite value and
+        leave them out with ``mask`` (0 photons alone would read as a black spot of DOLP 0, i.e. metal).
     angles : array (K,) [rad] -- polarizer angles.
     psf0 : array (Hp, Wp) or (P, Hp, Wp) on the object grid, optional -- initial or known PSF(s) (centred),
         P = ``frames`` with a shared PSF, K without.

@@ -11,12 +11,16 @@ at a pixel, the M-step solves
 .. math:: f(\mathcal P) = w\,m c_2^m\,\mathcal P(\mathcal P - 1)(\mathcal P - c_3)^{m-1} - \mathcal P T + Q = 0,
 
 an (m+1)-order polynomial with :math:`f(0) = Q \ge 0` and :math:`f(1) = Q - T \le 0`, so a root lies in
-[0, 1]. The coefficients reach :math:`c_2^m \approx 10^{15}` (aluminium group), so the polynomial is divided by
-``T`` and solved for every pixel at once: the roots lie between q = Q/T and c3 (see :func:`dolp_update`), each
-sign change on a grid over that interval is bracketed and refined by safeguarded Newton steps -- never the
-companion matrix per pixel (:func:`dolp_update_companion` does that for testing). Where
-several roots lie in [0, 1] the one with the largest complete-data objective
-:math:`Q\ln\mathcal P + (T - Q)\ln(1 - \mathcal P) + w\ln\Pi` is taken.
+[0, 1]. It is :math:`\mathcal P(1 - \mathcal P)` times the derivative of the complete-data objective
+:math:`Q\ln\mathcal P + (T - Q)\ln(1 - \mathcal P) + w\ln\Pi`, a sum of concave terms (m even, w >= 0): the
+objective has one maximum on [0, 1], the one root of f inside (0, 1) or an end (P = 0 at q = 0, P = 1 at
+q = 1, where f vanishes for that factor's sake whether or not the objective peaks there). The coefficients
+reach :math:`c_2^m \approx 10^{15}` (aluminium group) and, for priors the constructor accepts, 1e300 (and
+more over a small T), so f is divided by ``T``, its prior term is evaluated in logs, and it is solved for
+every pixel at once: the root lies between q = Q/T and c3 (see :func:`dolp_update`), the sign change on a
+grid over that interval is bracketed and refined by safeguarded Newton steps -- never the companion matrix
+per pixel (:func:`dolp_update_companion` does that for testing); without a sign change the maximum is at
+an end of the interval, the one of larger objective.
 """
 
 from __future__ import annotations
@@ -106,6 +110,47 @@ PRIOR_SETS = {
 }
 
 
+def _prior_set(priors, name: str = "priors") -> tuple:
+    """A set of DOLP priors as a tuple: a key of :data:`PRIOR_SETS` (``"ch5"``, ``"ch6"``, ``"ch7"``: the names
+    scene files and the command line use), one :class:`SuperGaussianPrior`, or a sequence of them.
+
+    Parameters
+    ----------
+    priors : str, SuperGaussianPrior or sequence of SuperGaussianPrior
+        The priors (an empty sequence gives an empty tuple).
+    name : str
+        The argument's name, for the error message.
+
+    Returns
+    -------
+    tuple of SuperGaussianPrior
+
+    Raises
+    ------
+    ValueError
+        An unknown key (the message lists the valid ones), or an element that is not a SuperGaussianPrior.
+    """
+    if isinstance(priors, str):
+        if priors not in PRIOR_SETS:
+            raise ValueError(
+                f"{name} must be one of the prior sets {sorted(PRIOR_SETS)} (PRIOR_SETS) or a "
+                f"sequence of SuperGaussianPrior, got {priors!r}"
+            )
+        return PRIOR_SETS[priors]
+    if isinstance(priors, SuperGaussianPrior):
+        return (priors,)
+    try:
+        out = tuple(priors)
+    except TypeError:
+        out = None
+    if out is None or not all(isinstance(p, SuperGaussianPrior) for p in out):
+        raise ValueError(
+            f"{name} must be a key of PRIOR_SETS {sorted(PRIOR_SETS)}, a SuperGaussianPrior or a "
+            f"sequence of them, got {priors!r}"
+        )
+    return out
+
+
 def map_objective(P, T, Q, prior: SuperGaussianPrior | None, weight: float = 1.0):
     """Complete-data objective of the DOLP at a pixel: Q ln P + (T - Q) ln(1 - P) + w ln Pi(P).
 
@@ -134,33 +179,75 @@ def map_objective(P, T, Q, prior: SuperGaussianPrior | None, weight: float = 1.0
     return out
 
 
-def _ipow(x, k: int):
-    """x**k for a small positive integer k by repeated squaring (float ** int calls pow() per element)."""
-    out, base = None, x
-    while k:
-        if k & 1:
-            out = base if out is None else out * base
-        k >>= 1
-        if k:
-            base = base * base
-    return out
+# ln of the cap on each scaled term of f and f' (e^600 ~ 4e260): a capped term exceeds |P - q| <= 1 by far, so f
+# keeps its sign, and (m - 1) times it stays finite for any order a prior can have
+_LOG_CAP = 600.0
 
 
-def _f_scaled(P, q, a, c3, m):
-    """f(P) / T with q = Q/T and a = w m c2^m / T."""
-    return a * P * (P - 1) * _ipow(P - c3, m - 1) - P + q
+def _log_a(T, prior: SuperGaussianPrior, weight: float):
+    """ln a with a = w m c2^m / T (-inf for w = 0): a itself reaches 1e600 and more (c2^m = 1e300, T = 1e-300)."""
+    with np.errstate(divide="ignore"):
+        return np.log(weight) + np.log(prior.m) + prior.m * np.log(prior.c2) - np.log(T)
+
+
+def _f_and_slope(x, q, la, c3, m, slope=True):
+    """f(P) / T = a P (P - 1) (P - c3)^(m-1) - P + q (q = Q/T, ln a = ``la``) and its slope at ``x`` (None
+    without ``slope``).
+
+    The prior's terms are evaluated in logs, each capped at e^600 (``_LOG_CAP``): no overflow for any ``a``,
+    the sign of f is exact where a term is capped (the rest, q - P, is at most 1), and near a root, where
+    the terms are of order 1, nothing is capped.
+    """
+    u = x - c3
+    s = np.sign(u)  # u^(m-1) has the sign of u (m even); P (P - 1) <= 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lu = np.log(np.abs(u))
+        lxx = np.log(x) + np.log1p(-x)  # ln[P (1 - P)]
+        # ln |u|^(m-2), 0 for m = 2 (also at u = 0)
+        lum2 = (m - 2) * lu if m > 2 else np.zeros_like(lu)
+        # |a P (P - 1) u^(m-1)|
+        f = q - x - s * np.exp(np.minimum(la + lxx + lum2 + lu, _LOG_CAP))
+        if not slope:
+            return f, None
+        # a |u|^(m-1) and a P (1 - P) |u|^(m-2)
+        g1 = np.exp(np.minimum(la + lum2 + lu, _LOG_CAP))
+        g2 = np.exp(np.minimum(la + lxx + lum2, _LOG_CAP))
+    return f, s * (2 * x - 1) * g1 - (m - 1) * g2 - 1
+
+
+def _inner_sign(f, df, lower):
+    """The sign of f just inside a bracket end where f is ``f`` and its slope ``df``: f itself, or where f is 0
+    (P = 0 at q = 0, P = 1 at q = 1, q = 0 exactly or a term too small to register) the slope's, negated at
+    the upper end (f(x -+ e) ~ -+ e f'(x)). Returns a float whose sign bit is the sign."""
+    inner = df if lower else -df
+    return np.where(f == 0, inner, f)
+
+
+def _scaled_objective(P, T, q, prior, weight):
+    """The objective :func:`map_objective` divided by T + w (the same maximiser): T / (T + w) and w / (T + w)
+    stay in [0, 1] where w / T would overflow (T down to 1e-300)."""
+    big = T >= weight
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(big, weight / np.where(big, T, 1.0), T / np.where(big, 1.0, weight))
+    alpha = np.where(big, 1.0, r) / (1.0 + r)
+    beta = np.where(big, r, 1.0) / (1.0 + r)
+    return map_objective(P, alpha, alpha * q, prior, beta)
 
 
 def dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1.0) -> np.ndarray:
     """MAP (or, without a prior, ML: Q/T) DOLP update for every pixel (Eq. 196).
 
     Pixels with T = 0 (no photons) keep P = 0 for the ML update and the prior's centre with a prior.
-    Bracket: with g(P) = a P (P - 1) (P - c3)^(m-1), g >= 0 on [0, c3] and g <= 0 on [c3, 1], so a root
-    (g = P - q) lies between q and c3 and nowhere else (P = 0 too when q = 0), and f(min) >= 0 >= f(max).
-    Every sign change of f on 9 points spanning [min(q, c3), max(q, c3)] is bracketed, all brackets of all
-    pixels are solved together by Newton steps safeguarded by bisection (:func:`_safeguarded_newton`, to
-    1e-13 relative in P and in 1 - P), and where a pixel has several roots the one of largest objective is
-    kept.
+    The objective Q ln P + (T - Q) ln(1 - P) + w ln Pi(P) is strictly concave on (0, 1) (a sum of concave
+    terms for w >= 0 and m even), so its maximum is unique: the one root of f (Eq. 196) inside (0, 1), or the
+    end P = 0 (q = 0) or P = 1 (q = 1) where the objective falls away from it. Bracket: with
+    g(P) = a P (P - 1) (P - c3)^(m-1), g >= 0 on [0, c3] and g <= 0 on [c3, 1], so the root (g = P - q) lies
+    between q and c3 and nowhere else. f is evaluated on 9 points spanning [min(q, c3), max(q, c3)] in a
+    scaled log form (no overflow for any c2^m <= 1e300, weight or T; :func:`_f_and_slope`), where f is 0 at
+    an end its sign just inside is taken from the slope, the first sign change from + to - is solved by
+    Newton steps safeguarded by bisection (:func:`_safeguarded_newton`, to 1e-13 relative in P and in
+    1 - P, or a unit in the last place); without a sign change the maximum is at an end, and the end of
+    larger objective is returned.
 
     Parameters
     ----------
@@ -193,53 +280,40 @@ def _dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 
     T, Q = np.broadcast_arrays(T, Q)
     empty = T <= 0
     Ts = np.where(empty, 1.0, T)
-    q = np.clip(Q / Ts, 0.0, 1.0)
+    # Q >= T is q = 1; below it Q / T <= 1 cannot overflow (T down to 1e-300)
+    q = np.divide(Q, Ts, out=np.ones_like(Ts), where=Q < Ts)
     if prior is None:
         return np.where(empty, 0.0, q)
     m, c3 = prior.m, float(np.clip(prior.c3, 0.0, 1.0))
-    # a few photons against c2^m ~ 1e15: the prior dominates; the cap keeps f finite (a P (P-1) (P-c3)^9 <= 1e200)
-    a = np.minimum(weight * m * prior.c2**m / np.maximum(Ts, 1e-150), 1e200).ravel()
-    qf = q.ravel()
+    Tf, qf = Ts.ravel(), q.ravel()
+    la = _log_a(Tf, prior, weight)  # a = w m c2^m / T, up to 1e600 and more: only ever used in logs
     lo_b, hi_b = np.minimum(qf, c3), np.maximum(qf, c3)
     t = np.linspace(0.0, 1.0, 9)[:, None]
-    xs = lo_b + (hi_b - lo_b) * t  # (17, pixels)
-    fg = _f_scaled(xs, qf, a, c3, m)
-    ends = np.flatnonzero(
-        (fg[0] == 0) | (hi_b == lo_b)
-    )  # q = 0 (or q = c3): the end point itself is a root
-    # at q = 0 f leaves the root P = 0 with the sign of f'(0) = a c3^(m-1) - 1: bracket from there
-    fg[0] = np.where(fg[0] == 0, a * c3 ** (m - 1) - 1, fg[0])
+    xs = lo_b + (hi_b - lo_b) * t  # (9, pixels)
+    fg, _ = _f_and_slope(xs, qf, la, c3, m, slope=False)
+    # f(min) >= 0 >= f(max); where f is 0 at an end (q = 0 or 1, or an underflow) its sign just inside counts
+    fg[0] = _inner_sign(fg[0], _f_and_slope(lo_b, qf, la, c3, m)[1], lower=True)
+    fg[-1] = _inner_sign(fg[-1], _f_and_slope(hi_b, qf, la, c3, m)[1], lower=False)
     neg = np.signbit(fg)
-    j, idx = np.nonzero(neg[:-1] != neg[1:])  # bracket j of pixel idx (f = +0 counts as positive)
-    P = _safeguarded_newton(xs[j, idx], xs[j + 1, idx], fg[j, idx], qf[idx], a[idx], c3, m)
-    idx, P = np.r_[idx, ends], np.r_[P, lo_b[ends]]
-    out = np.full(qf.size, np.nan)
-    counts = np.bincount(idx, minlength=qf.size)
-    single = counts[idx] == 1
-    out[idx[single]] = P[single]
-    multi = ~single
-    if np.any(multi):
-        im, Pm = idx[multi], P[multi]
-        obj = map_objective(
-            Pm, 1.0, qf[im], prior, np.minimum(weight / np.maximum(Ts.ravel()[im], 1e-200), 1e200)
-        )
-        order = np.lexsort((obj, im))  # per pixel, the root of largest objective comes last
-        last = np.r_[im[order][1:] != im[order][:-1], True]
-        out[im[order][last]] = Pm[order][last]
-    out = np.where(np.isnan(out), qf, out).reshape(
-        q.shape
-    )  # no bracket: cannot happen (f(min) >= 0 >= f(max))
+    # f from + (or +0) to -: concavity leaves one such cell, round-off may add some
+    change = ~neg[:-1] & neg[1:]
+    has = change.any(axis=0) & (hi_b > lo_b)
+    (idx,) = np.nonzero(has)
+    j = np.argmax(change[:, idx], axis=0)  # the first of them
+    r_lo, r_hi = lo_b.copy(), lo_b.copy()
+    r_lo[idx], r_hi[idx] = _safeguarded_newton(
+        xs[j, idx], xs[j + 1, idx], fg[j, idx], qf[idx], la[idx], c3, m
+    )
+    # the candidates, of which the largest objective wins: the ends of the root's final bracket (adjacent
+    # floats where a stiff prior peaks a few units from 1), or without a sign change (the maximum at an end)
+    # the ends of the interval. Not both: the objective ties within its rounding over ~1e-8 of a flat
+    # maximum, and an end would win such a tie against the root as often as not
+    cand = np.stack([np.where(has, r_lo, lo_b), np.where(has, r_hi, hi_b)])
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        obj = _scaled_objective(cand, Tf, qf, prior, weight)
+    obj = np.where(np.isnan(obj), -np.inf, obj)
+    out = cand[np.argmax(obj, axis=0), np.arange(qf.size)].reshape(q.shape)
     return np.where(empty, c3, out)
-
-
-def _f_and_slope(x, q, a, c3, m):
-    """f (:func:`_f_scaled`) and df/dP at ``x``."""
-    u = x - c3
-    um2 = _ipow(u, m - 2) if m > 2 else np.ones_like(u)
-    um1 = um2 * u
-    f = a * x * (x - 1) * um1 - x + q
-    df = a * ((2 * x - 1) * um1 + (m - 1) * x * (x - 1) * um2) - 1
-    return f, df
 
 
 def _wide(lo, hi):
@@ -255,20 +329,23 @@ def _bisection_point(lo, hi):
     fifty of P, and one near ``hi`` in about five. Arithmetic otherwise.
     """
     lo_eff = np.maximum(np.maximum(lo, 1e-20 * hi), 1e-300)
-    return np.where(_wide(lo, hi), np.sqrt(lo_eff * hi), 0.5 * (lo + hi))
+    # sqrt of each: lo_eff * hi underflows to 0 below 5e-324 (an optimum at P ~ 1e-160)
+    return np.where(_wide(lo, hi), np.sqrt(lo_eff) * np.sqrt(hi), 0.5 * (lo + hi))
 
 
-def _safeguarded_newton(lo, hi, flo, q, a, c3, m, rtol=1e-13, max_iter=200):
-    """Roots of f (:func:`_f_scaled`) in the brackets [lo, hi] (f(lo) has the sign of ``flo``).
+def _safeguarded_newton(lo, hi, flo, q, loga, c3, m, rtol=1e-13, max_iter=200):
+    """Roots of f (:func:`_f_and_slope`) in the brackets [lo, hi] (f(lo) has the sign of ``flo``).
 
     Vectorised Newton iteration safeguarded by bisection: where the bracket spans more than a
-    factor 4, or a Newton step leaves it or is not finite, the next point is
-    :func:`_bisection_point` (geometric on wide brackets, so an optimum many decades below the
-    bracket's top is approached in ln P). Each step keeps the sub-interval where f changes sign, so
-    the bracket always holds a root. Converged when the step or the bracket is below ``rtol`` times
+    factor 4, or a Newton step leaves it, is not finite or is not at most half the step before, the
+    next point is :func:`_bisection_point` (geometric on wide brackets, so an optimum many decades below
+    the bracket's top is approached in ln P). Each step keeps the sub-interval where f changes sign, so
+    the bracket always holds a root; a Newton step below the tolerance is followed by a probe just
+    across the root, which closes the bracket. Converged when the bracket is below ``rtol`` times
     min(P, 1 - P) (the objective's ln P and ln(1 - P) need relative accuracy in both: an optimum at
-    P ~ 1e-16 is resolved, which an absolute tolerance would miss) or below a few units in the last
-    place; iterates only on the unconverged brackets.
+    P ~ 1e-16 is resolved, which an absolute tolerance would miss) or below a unit in the last place
+    (where a stiff prior's optimum lies a few units from 1, each one counts); iterates only on the
+    unconverged brackets.
 
     Parameters
     ----------
@@ -276,8 +353,8 @@ def _safeguarded_newton(lo, hi, flo, q, a, c3, m, rtol=1e-13, max_iter=200):
         Bracket ends, 0 <= lo < hi <= 1 (DOLP, dimensionless).
     flo : ndarray, shape (k,)
         f at ``lo`` (or any value of its sign).
-    q, a : ndarray, shape (k,)
-        q = Q / T and a = w m c2^m / T of each bracket's pixel.
+    q, loga : ndarray, shape (k,)
+        q = Q / T and ln a, a = w m c2^m / T, of each bracket's pixel.
     c3 : float
         Prior centre (DOLP).
     m : int
@@ -289,37 +366,54 @@ def _safeguarded_newton(lo, hi, flo, q, a, c3, m, rtol=1e-13, max_iter=200):
 
     Returns
     -------
-    ndarray, shape (k,)
-        The roots (DOLP, dimensionless).
+    lo, hi : ndarray, shape (k,)
+        The final brackets (DOLP, dimensionless), at most the tolerance wide (both ends at a root where f
+        is 0 there): near 1 a stiff prior's objective changes much between adjacent floats, so the caller
+        takes the end of larger objective.
     """
-    eps = np.finfo(float).eps
     lo, hi, flo = lo.copy(), hi.copy(), flo.copy()
     x = _bisection_point(lo, hi)
+    step = np.full(x.size, np.inf)  # the last step taken
     active = np.arange(x.size)
     for _ in range(max_iter):
         if not active.size:
             break
         xa, la, ha = x[active], lo[active], hi[active]
-        f, df = _f_and_slope(xa, q[active], a[active], c3, m)
-        same = np.signbit(f) == np.signbit(flo[active])
-        la = np.where(same, xa, la)
-        ha = np.where(same, ha, xa)
-        flo[active] = np.where(same, f, flo[active])
+        f, df = _f_and_slope(xa, q[active], loga[active], c3, m)
+        up = np.signbit(f) == np.signbit(
+            flo[active]
+        )  # f at xa has the sign at lo: the root lies above
+        la = np.where(up, xa, la)
+        ha = np.where(up, ha, xa)
+        flo[active] = np.where(up, f, flo[active])
+        tol = np.maximum(rtol * np.minimum(xa, 1 - xa), np.spacing(xa))
+        done = (ha - la <= tol) | (f == 0)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             xn = xa - f / df
-        bad = ~np.isfinite(xn) | (xn <= la) | (xn >= ha) | _wide(la, ha)
+        newton = np.abs(xn - xa)
+        # a Newton step below the tolerance probes 0.9 tol beyond xa toward the root: across it, the bracket
+        # closes; one that does not land inside the bracket, is not finite or does not halve the step before
+        # (a root in the flat of a high power, e.g. (1 - P)^10 near c3 = 1, where Newton gains 10 % a step)
+        # gives way to bisection, as a wide bracket does
+        small = newton <= tol
+        xn = np.where(small, xa + np.where(up, 0.9, -0.9) * tol, xn)
+        slow = ~small & (newton > 0.5 * step[active])
+        bad = _wide(la, ha) | slow | ~((xn > la) & (xn < ha))
         if np.any(bad):
             xn[bad] = _bisection_point(la[bad], ha[bad])
-        tol = np.maximum(rtol * np.minimum(xa, 1 - xa), 4 * eps * xa)
-        done = (np.abs(xn - xa) <= tol) | (ha - la <= tol) | (f == 0)
-        x[active], lo[active], hi[active] = np.where(f == 0, xa, xn), la, ha
+        xn = np.where(done, xa, xn)
+        step[active] = np.abs(xn - xa)
+        root = f == 0
+        x[active], lo[active], hi[active] = xn, np.where(root, xa, la), np.where(root, xa, ha)
         active = active[~done]
-    return x
+    return lo, hi
 
 
 def dolp_update_companion(T, Q, prior: SuperGaussianPrior, weight: float = 1.0) -> float:
     """Reference for one pixel: the real roots in [0, 1] of Eq. 196 by the companion matrix (numpy.roots),
-    the one with the largest objective. Slow and, for c2^m ~ 1e15, needs the scaling by T to stay accurate.
+    and the ends of the bracket (:func:`dolp_update`), the one with the largest objective. Slow and, for
+    c2^m ~ 1e15, needs the scaling by T to stay accurate; below T ~ 1 (a = w m c2^m / T large) the cluster of
+    roots near c3 is ill-conditioned and the result is off by up to ~1e-3 (:func:`dolp_update` is not).
 
     Parameters
     ----------
@@ -349,8 +443,11 @@ def dolp_update_companion(T, Q, prior: SuperGaussianPrior, weight: float = 1.0) 
     real = roots[
         (np.abs(roots.imag) < 1e-9) & (roots.real >= -1e-12) & (roots.real <= 1 + 1e-12)
     ].real
-    real = np.clip(real, 0, 1)
-    obj = map_objective(real, 1.0, Q / T, prior, weight / T)
+    # with the ends of the bracket [min(q, c3), max(q, c3)] (the objective's maximum on them or between):
+    # where roots crowd (q = 1 and a root near 1) the companion matrix turns them complex and drops them
+    q = Q / T
+    real = np.r_[np.clip(real, 0, 1), min(q, c3), max(q, c3)]
+    obj = map_objective(real, 1.0, q, prior, weight / T)
     return float(real[np.argmax(obj)])
 
 
@@ -366,9 +463,10 @@ def adaptive_priors(dolp, base=PRIOR_SETS["ch5"], *, m: int = 10, mask=None):
     Parameters
     ----------
     dolp : array_like
-        DOLP image (any shape, dimensionless); NaN pixels are ignored.
-    base : tuple of SuperGaussianPrior
-        The sets whose names are kept (default Ch. V's).
+        DOLP image (any shape, dimensionless); NaN pixels, and the masked ones of a numpy masked array (as
+        :func:`scatterlab.imaging.dolp_aop_from_stokes` returns), are ignored.
+    base : str or tuple of SuperGaussianPrior
+        The set whose names are kept (default Ch. V's), or its key in :data:`PRIOR_SETS`.
     m : int
         Order of the new priors (even).
     mask : array_like of bool, optional
@@ -390,7 +488,10 @@ def adaptive_priors(dolp, base=PRIOR_SETS["ch5"], *, m: int = 10, mask=None):
     """
     from scipy.cluster.vq import kmeans2
 
-    v = np.asarray(dolp, float)
+    base = _prior_set(base, "base")
+    v = np.ma.filled(
+        np.ma.asarray(dolp, float), np.nan
+    )  # masked pixels (imaging's DOLP images) are left out
     v = v[np.isfinite(v) & (mask if mask is not None else True)].ravel()
     if v.size < 10:
         raise ValueError("adaptive_priors needs at least 10 finite DOLP values")
