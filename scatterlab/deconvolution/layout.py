@@ -57,7 +57,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scatterlab._checks import as_count
+from scatterlab._checks import as_count, as_rng
 
 __all__ = ["LayoutResult", "edge_band_mask", "layout_psf"]
 
@@ -302,7 +302,7 @@ def layout_psf(
     f = _Objective(problem, materials)
     pp, inside = problem.phase_psf, problem.phase_psf.inside
     z, a, p = _start_layout(
-        start.s0, start.dolp, problem.ops.pad, materials, np.random.default_rng(rng)
+        start.s0, start.dolp, problem.ops.pad, materials, as_rng(rng)
     )
     # bounds as arrays (scipy.optimize.Bounds): a list of 10^5 (lo, hi) pairs cost scipy a tenth of the
     # refinement's time to convert at every call

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_count
+from scatterlab._checks import as_count, as_rng
 
 __all__ = ["initial_psf", "gerchberg_saxton", "psf_distance", "resample_psf"]
 
@@ -54,7 +54,7 @@ def initial_psf(pupil, shape, d_over_r0: float = 10.0, rng=None) -> np.ndarray:
     n = A.shape[0]
     diameter = 2 * np.sqrt((A > 0).sum() / np.pi)  # pupil diameter [grid samples]
     phase = remove_piston_tilt(
-        phase_screen(n, 1.0, diameter / d_over_r0, np.random.default_rng(rng)), A > 0
+        phase_screen(n, 1.0, diameter / d_over_r0, as_rng(rng)), A > 0
     )
     return resample_psf(psf(A, phase, pad=2), shape)
 
