@@ -142,7 +142,10 @@ def as_rng(rng, name: str = "rng") -> np.random.Generator:
         ok = (
             seeds is not None
             and seeds.size > 0
-            and all(isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_)) for v in seeds)
+            and all(
+                isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
+                for v in seeds
+            )
         )
         if ok and any(int(v) < 0 for v in seeds):
             raise ValueError(f"{allowed}; got a negative seed {rng!r}")

@@ -301,9 +301,7 @@ def layout_psf(
     problem, state = _setup(data, angles, psfs, pupil, opts)
     f = _Objective(problem, materials)
     pp, inside = problem.phase_psf, problem.phase_psf.inside
-    z, a, p = _start_layout(
-        start.s0, start.dolp, problem.ops.pad, materials, as_rng(rng)
-    )
+    z, a, p = _start_layout(start.s0, start.dolp, problem.ops.pad, materials, as_rng(rng))
     # bounds as arrays (scipy.optimize.Bounds): a list of 10^5 (lo, hi) pairs cost scipy a tenth of the
     # refinement's time to convert at every call
     free_bounds = (np.full(f.n, -np.inf), np.full(f.n, np.inf))

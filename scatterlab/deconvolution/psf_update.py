@@ -53,9 +53,7 @@ def initial_psf(pupil, shape, d_over_r0: float = 10.0, rng=None) -> np.ndarray:
         )
     n = A.shape[0]
     diameter = 2 * np.sqrt((A > 0).sum() / np.pi)  # pupil diameter [grid samples]
-    phase = remove_piston_tilt(
-        phase_screen(n, 1.0, diameter / d_over_r0, as_rng(rng)), A > 0
-    )
+    phase = remove_piston_tilt(phase_screen(n, 1.0, diameter / d_over_r0, as_rng(rng)), A > 0)
     return resample_psf(psf(A, phase, pad=2), shape)
 
 

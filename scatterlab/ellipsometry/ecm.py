@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import as_finite
+from scatterlab._checks import as_finite, as_positive
 from scatterlab.polarization.mueller import nearest_physical_mueller, rotate_mueller
 
 __all__ = ["ecm_calibrate", "ECMCalibration", "reference_parameters", "reference_mueller"]
@@ -54,7 +54,7 @@ def reference_parameters(C: np.ndarray, kind: str) -> tuple[float, float, float]
     Parameters
     ----------
     C : ndarray (4, 4)
-        ``B0^-1 B`` of the reference (similar to its Mueller matrix).
+        ``B0^-1 B`` of the reference (similar to its Mueller matrix), finite.
     kind : {"polarizer", "retarder"}
 
     Returns
@@ -73,7 +73,16 @@ def reference_parameters(C: np.ndarray, kind: str) -> tuple[float, float, float]
     Psi = 0 (polarizers) or 45 deg (retarders). For a retarder the pair is the one with the largest
     imaginary parts; for a polarizer it is the two eigenvalues between the largest and the smallest
     in magnitude.
+
+    Raises
+    ------
+    ValueError
+        ``C`` not a finite 4x4 matrix, ``kind`` not one of ``"polarizer"``, ``"retarder"``, or no
+        transmitted intensity (``tau <= 0``).
     """
+    C = _check_matrix(C, "C")
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     lam = np.linalg.eigvals(C)
     if kind == "retarder":
         order = np.argsort(-np.abs(lam.imag))
@@ -104,16 +113,30 @@ def reference_mueller(tau, psi, delta, azimuth) -> np.ndarray:
     Parameters
     ----------
     tau : float
-        Transmission.
+        Transmission, finite and ``>= 0``.
     psi, delta : float [rad]
-        Diattenuation angle and retardance.
+        Diattenuation angle and retardance (finite).
     azimuth : float [rad]
-        Orientation of the element.
+        Orientation of the element (finite).
 
     Returns
     -------
     ndarray (4, 4)
+
+    Raises
+    ------
+    ValueError
+        A negative or non-finite ``tau``, or a non-finite angle.
     """
+    tau = float(as_positive(tau, "tau (transmission)", allow_zero=True))
+    psi, delta, azimuth = (
+        float(as_finite(v, nm)) for v, nm in ((psi, "psi"), (delta, "delta"), (azimuth, "azimuth"))
+    )
+    return _reference_mueller(tau, psi, delta, azimuth)
+
+
+def _reference_mueller(tau, psi, delta, azimuth) -> np.ndarray:
+    """:func:`reference_mueller` unchecked (the refinements' residuals: a trial tau may be < 0)."""
     c2, s2 = np.cos(2 * psi), np.sin(2 * psi)
     M0 = tau * np.array(
         [
@@ -217,7 +240,7 @@ def _refine(B0, Bs, W, A, params, azimuths, fixed_index=0):
             tau, psi, delta, az = rest[i]
             if i == fixed_index:
                 az = azimuths[fixed_index]
-            out.append((A_ @ reference_mueller(tau, psi, delta, az) @ W_ - B).ravel())
+            out.append((A_ @ _reference_mueller(tau, psi, delta, az) @ W_ - B).ravel())
         return np.concatenate(out)
 
     x0 = np.concatenate(
@@ -276,7 +299,7 @@ class _AzimuthProblem:
 
     def muellers(self, free):
         az = [self.fixed] + list(free)
-        return [reference_mueller(*p, a) for p, a in zip(self.params, az)]
+        return [_reference_mueller(*p, a) for p, a in zip(self.params, az)]
 
     def eig(self, free):
         """Eigenvalues (ascending) and eigenvectors of K."""

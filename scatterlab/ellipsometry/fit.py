@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from scatterlab._checks import as_angle, as_finite, as_positive, check_starts
+from scatterlab._checks import ETA_MAX, ETA_MIN, as_angle, as_finite, as_positive, check_starts
 from scatterlab.pbrdf import Model
 
 __all__ = [
@@ -30,6 +30,8 @@ __all__ = [
     "fit_mueller_elements",
     "MuellerFit",
     "least_squares_from_starts",
+    "check_bounds",
+    "STD_MIN",
 ]
 
 ELEMENTS = ((0, 1), (1, 1), (2, 2), (2, 3))
@@ -37,6 +39,61 @@ ELEMENT_TOLERANCE = 0.05  # normalised elements may exceed [-1, 1] by this much 
 # fit_mueller_elements' default box for (n, kappa, sigma): a parameter at one of these values is a bound,
 # not an estimate (kappa = 0, a dielectric, is physical)
 FIT_BOUNDS = ((0.01, 10.0), (0.0, 30.0), (0.01, 1.5))
+SIGMA_RANGE = (1e-4, 5.0)  # the rms slopes the pBRDF accepts (scatterlab.pbrdf.Model)
+# smallest standard error of a normalised element (in [-1, 1], known to ~1e-16 in double precision):
+# below it the weights 1/std make J^T J overflow (std = 1e-300) and add nothing but rounding
+STD_MIN = 1e-15
+
+
+def check_bounds(bounds, name: str = "bounds") -> tuple[np.ndarray, np.ndarray]:
+    """Validated box ``((n_lo, n_hi), (kappa_lo, kappa_hi), (sigma_lo, sigma_hi))`` of a pBRDF fit.
+
+    Shared by :func:`fit_mueller_elements` and :func:`scatterlab.ellipsometry.fit_pbrdf`.
+
+    Parameters
+    ----------
+    bounds : array_like (3, 2)
+        Finite, ``lo < hi`` for each parameter; ``n_lo >= 0`` and ``kappa_lo >= 0`` (the domain of
+        ``eta = n - 1j*kappa``) with ``|eta|`` of the box's corners within ``[1e-50, 1e50]``
+        (:data:`scatterlab._checks.ETA_MIN`, ``ETA_MAX``); sigma within ``[1e-4, 5]``.
+    name : str
+        The argument's name in the messages.
+
+    Returns
+    -------
+    lo, hi : ndarray (3,)
+        Lower and upper bounds of (n, kappa, sigma).
+
+    Raises
+    ------
+    ValueError
+        Any of the conditions above violated (the message names ``name`` and the allowed range).
+    """
+    form = f"{name} must be ((n_lo, n_hi), (kappa_lo, kappa_hi), (sigma_lo, sigma_hi))"
+    try:
+        arr = np.asarray(bounds, float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{form}, got {bounds!r}") from exc
+    if arr.shape != (3, 2):
+        raise ValueError(f"{form}: shape (3, 2), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{form} with finite values (no NaN or inf), got {bounds!r}")
+    lo, hi = arr.T
+    if np.any(~(lo < hi)):
+        raise ValueError(f"{form} with lo < hi for each parameter, got {bounds!r}")
+    if lo[0] < 0 or lo[1] < 0:
+        raise ValueError(
+            f"{form} with n_lo >= 0 and kappa_lo >= 0 (eta = n - 1j*kappa), got {bounds!r}"
+        )
+    if np.hypot(lo[0], lo[1]) < ETA_MIN or np.hypot(hi[0], hi[1]) > ETA_MAX:
+        raise ValueError(
+            f"{form} with {ETA_MIN:g} <= |n - 1j*kappa| <= {ETA_MAX:g} at the corners (n_lo, kappa_lo) "
+            f"and (n_hi, kappa_hi), got {bounds!r}"
+        )
+    s_lo, s_hi = SIGMA_RANGE
+    if lo[2] < s_lo or hi[2] > s_hi:
+        raise ValueError(f"{form} with sigma within [{s_lo:g}, {s_hi:g}], got {bounds!r}")
+    return lo.copy(), hi.copy()
 
 
 def normalised_elements(M) -> np.ndarray:
@@ -141,8 +198,11 @@ def _checked_data(theta, measured, std, tolerance):
         s = as_finite(std, "std")
         if s.shape != y.shape:
             raise ValueError(f"std must have the shape of measured {y.shape}, got {s.shape}")
-        if np.any(s <= 0):
-            raise ValueError("std (standard errors) must be > 0")
+        if np.any(s < STD_MIN):
+            raise ValueError(
+                f"std (standard errors of the normalised elements) must be >= {STD_MIN:g}, got "
+                f"{float(s.min()):.3g}"
+            )
         w = 1.0 / s
     return theta, y, w
 
@@ -171,7 +231,8 @@ def fit_mueller_elements(
         ``(M01, M11, M22, M23) / M00`` (see :func:`normalised_elements`), in [-1, 1] up to
         ``tolerance``.
     std : array_like (N, 4), optional
-        Standard errors used as weights (> 0).
+        Standard errors used as weights, finite and ``>= 1e-15`` (:data:`STD_MIN`: below the
+        double-precision resolution of elements in [-1, 1], where ``1/std`` overflows the fit).
     sigma : float, optional
         Known roughness (required when ``fit_sigma`` is False; the starting value otherwise).
     fit_sigma : bool
@@ -181,7 +242,9 @@ def fit_mueller_elements(
     sigma0 : float
         Starting roughness when ``sigma`` is not given (finite, > 0).
     bounds : ((n_lo, n_hi), (k_lo, k_hi), (s_lo, s_hi)), optional
-        Box of the fit (default :data:`FIT_BOUNDS`).
+        Box of the fit (default :data:`FIT_BOUNDS`), checked by :func:`check_bounds`: finite,
+        ``lo < hi``, ``n_lo, k_lo >= 0``, sigma within ``[1e-4, 5]``; the sigma bounds are checked
+        but unused when ``fit_sigma`` is False.
     shadowing, diffuse : str
         Options of :class:`scatterlab.pbrdf.Model`.
     tolerance : float
@@ -198,13 +261,14 @@ def fit_mueller_elements(
     ------
     ValueError
         Angles outside [0, pi/2], ``measured`` of the wrong shape, non-finite, or outside [-1, 1]
-        beyond ``tolerance``; ``std`` not > 0 or of the wrong shape; no ``sigma`` with
-        ``fit_sigma=False``; empty, non-finite or negative ``starts``; ``sigma``, ``sigma0`` or
-        ``tolerance`` out of range.
+        beyond ``tolerance``; ``std`` below 1e-15 or of the wrong shape; no ``sigma`` with
+        ``fit_sigma=False``; empty, non-finite or negative ``starts``; bad ``bounds`` (see
+        :func:`check_bounds`); ``sigma``, ``sigma0`` or ``tolerance`` out of range.
     """
     tolerance = float(as_positive(tolerance, "tolerance", allow_zero=True))
     theta, y, w = _checked_data(theta, measured, std, tolerance)
     starts = check_starts(starts)
+    lo, hi = check_bounds(FIT_BOUNDS if bounds is None else bounds)
     if not fit_sigma and sigma is None:
         raise ValueError("sigma must be given when fit_sigma is False")
     if sigma is None:
@@ -218,7 +282,7 @@ def fit_mueller_elements(
         return ((pred - y) * w).ravel()
 
     P = 3 if fit_sigma else 2
-    lo, hi = np.array(FIT_BOUNDS if bounds is None else bounds, float)[:P].T
+    lo, hi = lo[:P], hi[:P]
     x0s = [np.clip([n0, k0, s0][:P], lo + 1e-9, hi - 1e-9) for n0, k0 in starts]
     best = least_squares_from_starts(residual, x0s, lo, hi, tol=1e-15, max_nfev=2000)
     cov = _covariance(best.jac, 1.0 if std is not None else 2 * best.cost / _dof(best))

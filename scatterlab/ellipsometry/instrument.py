@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from scatterlab._checks import as_finite, as_positive
+from scatterlab._checks import as_count, as_finite, as_positive, as_rng
 from scatterlab.polarization import linear_polarizer, linear_retarder
 
 __all__ = [
@@ -223,6 +223,16 @@ def tetrahedral_psa() -> np.ndarray:
     return tetrahedral_psg().T
 
 
+def _mueller(M) -> np.ndarray:
+    """``M`` as a finite float array of shape (..., 4, 4), else a ValueError naming it."""
+    M = as_finite(M, "M (the sample Mueller matrices)")
+    if M.ndim < 2 or M.shape[-2:] != (4, 4):
+        raise ValueError(
+            f"M (the sample Mueller matrices) must have shape (..., 4, 4), got {M.shape}"
+        )
+    return M
+
+
 def condition_number(X) -> float:
     """2-norm condition number of a PSG or PSA matrix.
 
@@ -297,13 +307,18 @@ class Instrument:
         Parameters
         ----------
         M : array_like (..., 4, 4)
-            Sample Mueller matrices.
+            Sample Mueller matrices, finite.
 
         Returns
         -------
         ndarray (..., 4, 4)
+
+        Raises
+        ------
+        ValueError
+            ``M`` not of shape (..., 4, 4), or NaN/inf in it.
         """
-        return self.A @ np.asarray(M, float) @ self.W
+        return self.A @ _mueller(M) @ self.W
 
     def measure(
         self,
@@ -329,20 +344,27 @@ class Instrument:
             Absolute noise standard deviation added to the relative one (same units as B; finite,
             >= 0).
         repeats : int
-            Measurements averaged (>= 1).
+            Measurements averaged (an integer >= 1).
         relative_to : {"each", "max"}
 
         Returns
         -------
         B_mean, B_std : ndarray ``(..., 4, 4)`` (std is zero for one repeat).
+
+        Raises
+        ------
+        ValueError
+            ``M`` not a finite array of shape (..., 4, 4); ``noise`` or ``noise_floor`` negative or
+            not finite; ``repeats`` not an integer >= 1; an unknown ``relative_to``; an ``rng`` that
+            is not a seed or generator.
         """
-        if repeats < 1:
-            raise ValueError("repeats must be >= 1")
+        M = _mueller(M)
+        repeats = as_count(repeats, "repeats", 1)
         noise = float(as_positive(noise, "noise", allow_zero=True))
         noise_floor = float(as_positive(noise_floor, "noise_floor", allow_zero=True))
         if relative_to not in ("each", "max"):
             raise ValueError("relative_to must be 'each' or 'max'")
-        rng = np.random.default_rng(rng)
+        rng = as_rng(rng)
         B = self.intensities(M)
         ref = (
             np.abs(B) if relative_to == "each" else np.max(np.abs(B), axis=(-2, -1), keepdims=True)

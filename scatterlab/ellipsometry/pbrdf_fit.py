@@ -11,6 +11,11 @@ Residuals, per geometry ``g`` and element ``jk``:
   the data have standard deviations, otherwise ``w = F_{g,00}`` of the data (a relative-error model:
   every element is measured to a fixed fraction of the total signal; ``F_00`` is floored at 1e-6 of
   its largest value);
+* a dark geometry (``F_00 <= 0``: no light, so no normalised Mueller information) is dropped with a
+  warning when the weights come from ``F_00`` (no ``std``) or the data are normalised -- weighted by
+  its ``F_00`` it would count a million times more than the others; with ``std`` it is kept (its
+  standard deviations weight it, and noise can make a faint ``F_00`` negative). Data dark at every
+  geometry are refused;
 * normalised data (no absolute scale): the 15 ratios :math:`F_{jk}/F_{00}`, divided by their ``std``
   if given.
 
@@ -40,13 +45,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from scatterlab._checks import check_starts
-from scatterlab.ellipsometry.fit import IndexFitMixin, least_squares_from_starts
+from scatterlab._checks import as_count, as_rng, check_starts
+from scatterlab.ellipsometry.fit import (
+    FIT_BOUNDS,
+    IndexFitMixin,
+    check_bounds,
+    least_squares_from_starts,
+)
 from scatterlab.pbrdf import Model
 
 __all__ = ["PBRDFFit", "fit_pbrdf", "depolarization_index"]
 
-BOUNDS = ((0.01, 10.0), (0.0, 30.0), (0.01, 1.5))
+BOUNDS = FIT_BOUNDS
 STARTS = ((0.5, 5.0), (1.5, 10.0), (3.0, 3.0), (1.5, 0.1))
 _CIRCULAR = np.zeros((4, 4), bool)
 _CIRCULAR[3, :3] = _CIRCULAR[:3, 3] = True
@@ -114,6 +124,9 @@ class PBRDFFit(IndexFitMixin):
     posterior : dict or None
         ``samples`` (S, 3) of (n, kappa, sigma), ``acceptance``, ``steps``, ``walkers`` when
         sampled.
+    options : dict
+        The fit's options; ``dropped`` lists the indices (into the data at the fitted wavelength)
+        of the dark geometries left out, whose rows ``predicted`` and ``residuals`` do not have.
     """
 
     n: float
@@ -256,6 +269,28 @@ def _depolarization(y, F):
     }
 
 
+def _drop_dark(data):
+    """The data without dark geometries (``F_00 <= 0``) where their weight would come from ``F_00``
+    (module docstring), and the indices dropped; ValueError when every geometry is dark."""
+    m00 = data.mueller[:, 0, 0]
+    dark = ~(m00 > 0)
+    if dark.all():
+        raise ValueError(
+            f"data (the Mueller BRDF) are dark at all {len(data)} geometries (F00 <= 0): there is "
+            "no light to fit"
+        )
+    if not dark.any() or (data.std is not None and not data.normalised):
+        return data, []
+    dropped = np.flatnonzero(dark).tolist()
+    warnings.warn(
+        f"dropped {len(dropped)} of {len(data)} geometries of data with F00 <= 0 (no light: no "
+        f"normalised Mueller information), at indices {dropped}",
+        UserWarning,
+        stacklevel=3,
+    )
+    return data.subset(~dark), dropped
+
+
 def _select(data, wavelength):
     if wavelength is not None:
         return data.select(wavelength)
@@ -298,6 +333,8 @@ def fit_pbrdf(
     sigma0 : float
         Starting roughness.
     bounds : ((n_lo, n_hi), (kappa_lo, kappa_hi), (sigma_lo, sigma_hi))
+        Box of the fit, checked by :func:`scatterlab.ellipsometry.fit.check_bounds` (finite,
+        ``lo < hi``, ``n_lo, kappa_lo >= 0``, sigma within ``[1e-4, 5]``).
     posterior_steps : int
         emcee steps per walker (0: no posterior). The first half is discarded as burn-in.
     walkers : int
@@ -313,25 +350,26 @@ def fit_pbrdf(
     -------
     PBRDFFit
 
+    Warns
+    -----
+    UserWarning
+        Dark geometries (``F00 <= 0``) dropped: how many and which (module docstring).
+
     Raises
     ------
     ValueError
-        Several wavelengths and none chosen, a wavelength not in the data, empty, non-finite or
-        negative ``starts``, bad
-        bounds, a known ``sigma`` outside the bounds, non-positive standard deviations of fitted
-        elements, fewer data than parameters.
+        Several wavelengths and none chosen, a wavelength not in the data, data dark (``F00 <= 0``)
+        at every geometry, empty, non-finite or negative ``starts``, bad bounds, a known ``sigma``
+        outside the bounds, non-positive standard deviations of fitted elements, fewer data than
+        parameters.
     """
-    data = _select(data, wavelength)
     starts = [tuple(s) for s in check_starts(starts).tolist()]
-    lo, hi = np.array(bounds, float).T
-    if lo.shape != (3,) or np.any(~(lo < hi)) or lo[2] < 1e-4 or hi[2] > 5:
-        raise ValueError(
-            "bounds must be ((n_lo, n_hi), (kappa_lo, kappa_hi), (sigma_lo, sigma_hi)) with lo < "
-            "hi "
-            "and sigma within [1e-4, 5]"
-        )
+    lo, hi = check_bounds(bounds)
     if posterior_steps < 0 or int(posterior_steps) != posterior_steps:
         raise ValueError(f"posterior_steps must be a non-negative integer, got {posterior_steps}")
+    if posterior_steps:  # checked before the fit, not after it
+        walkers = as_count(walkers, "walkers", 8)
+        rng = as_rng(rng)
     if sigma is not None:
         sigma = float(sigma)
         if not lo[2] <= sigma <= hi[2]:  # also refuses NaN
@@ -339,6 +377,8 @@ def fit_pbrdf(
                 f"sigma (the known roughness) must be within the bounds' [{lo[2]:g}, {hi[2]:g}], "
                 f"got {sigma}"
             )
+    data = _select(data, wavelength)
+    data, dropped = _drop_dark(data)
     prob = _Problem(data, shadowing, diffuse)
     if prob.used.sum() * len(data) <= (3 if sigma is None else 2):
         raise ValueError(
@@ -355,6 +395,7 @@ def fit_pbrdf(
             diffuse=diffuse,
             bounds=[list(b) for b in bounds],
             sigma_known=sigma,
+            dropped=dropped,
         ),
         (lo, hi),
         posterior_steps,
@@ -451,9 +492,7 @@ def _sample(prob, x, cov, s2, bounds, steps, walkers, rng, sigma=None) -> dict:
     ``sigma`` over (n, kappa) only, the samples' sigma column then that value."""
     import emcee
 
-    if walkers < 8:
-        raise ValueError(f"walkers must be >= 8, got {walkers}")
-    rng = np.random.default_rng(rng)
+    rng = np.random.default_rng(rng)  # walkers and rng were checked by fit_pbrdf
     k = 3 if sigma is None else 2
     lo, hi = bounds[0][:k], bounds[1][:k]
 

@@ -151,7 +151,16 @@ def physical_optics(sol: Solution, incidence, polarization: str = "s") -> Soluti
     Returns
     -------
     Solution -- with the physical-optics unknowns (residual 0).
+
+    Raises
+    ------
+    ValueError
+        ``polarization`` not "s" or "p".
     """
+    if polarization not in ("s", "p"):
+        raise ValueError(
+            f"polarization must be 's' (E along z) or 'p' (H along z), got {polarization!r}"
+        )
     c, k = sol.contour, sol.k
     d = np.array([np.sin(incidence.theta), -np.cos(incidence.theta)])
     lit = d[0] * c.nx + d[1] * c.ny < 0

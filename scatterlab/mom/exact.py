@@ -29,6 +29,8 @@ from scatterlab._checks import as_finite, as_index, as_positive
 
 __all__ = ["cylinder_echo_width", "cylinder_surface_field", "cylinder_coefficients"]
 
+KA_MIN = 1e-300  # smallest electrical radius: 2/(pi ka) and H_1(ka) ~ 2j/(pi ka) stay finite
+
 
 def _orders(ka, m=None):
     # beyond |n| ~ ka the fields outside and on the surface fall off as J_n(ka) / H_n(ka) ~ (ka/2n)^(2n)
@@ -40,6 +42,10 @@ def _orders(ka, m=None):
 
 def _checked(ka, polarization, eta):
     ka = float(as_positive(ka, "ka"))
+    if ka < KA_MIN:
+        raise ValueError(
+            f"ka must be >= {KA_MIN:g} (below it the Wronskian 2/(pi ka) overflows), got {ka:g}"
+        )
     if polarization not in ("s", "p"):
         raise ValueError(f"polarization must be 's' or 'p', got {polarization!r}")
     return ka, (None if eta is None else complex(as_index(eta, "eta")))
@@ -54,7 +60,7 @@ def cylinder_coefficients(ka, polarization: str = "s", eta=None):
     Parameters
     ----------
     ka : float
-        Electrical radius ``k a`` [dimensionless].
+        Electrical radius ``k a`` [dimensionless], ``>= 1e-300``.
     polarization : {"s", "p"}
         ``"s"`` (E_z) or ``"p"`` (H_z).
     eta : complex, optional
@@ -67,25 +73,67 @@ def cylinder_coefficients(ka, polarization: str = "s", eta=None):
     a : ndarray, shape (2N+1,), complex
         Scattering coefficients a_n.
     c : ndarray, shape (2N+1,), complex
-        Surface-field coefficients c_n.
+        Surface-field coefficients c_n, computed as :math:`-2j/(\\pi x D_n)` from the Wronskian
+        (no cancellation); orders whose :math:`H_n(x)` overflows (:math:`|n| \\gg x`) have
+        :math:`a_n = c_n = 0`, their small-argument limits below the smallest double.
+
+    Raises
+    ------
+    ValueError
+        ``ka`` not finite or below 1e-300, an unknown ``polarization``, ``eta`` out of range.
     """
     ka, eta = _checked(ka, polarization, eta)
     n = _orders(ka, eta)
     x = ka
-    J, H = special.jv(n, x), special.hankel2(n, x)
-    Jp, Hp = special.jvp(n, x), special.h2vp(n, x)
-    if eta is None:
-        a = J / H if polarization == "s" else Jp / Hp
-    else:
-        mx = eta * x
-        with np.errstate(
-            over="ignore", invalid="ignore", divide="ignore"
-        ):  # far orders: dropped below
-            L = (special.jve(n - 1, mx) - special.jve(n + 1, mx)) / (2 * special.jve(n, mx))
-            q = eta if polarization == "s" else 1 / eta
-            a = (Jp - q * L * J) / (Hp - q * L * H)
-    a = np.where(np.isfinite(a), a, 0.0)  # far orders whose H_n overflowed contribute nothing
-    return n, a, J - a * H
+    # With m = |n| (J_(-m) = (-1)^m J_m, the same for H; a_(-m) = a_m, c_(-m) = (-1)^m c_m):
+    # a_n = N/D and, by the Wronskian J H' - J' H = -2j/(pi x), c_n = J - a_n H = -2j/(pi x D), with
+    # D = H (s PEC: c = 0), H' (p PEC) or H' - q L H, all divided through by H: H'/H = H_(m-1)/H_m
+    # - m/x (H' overflows first at small x), and L = m/(eta x) - r, r = J_(m+1)/J_m(eta x), so
+    # that the m/x of J' and of q L cancel analytically in N (s-pol: N = -J_(m+1) + eta r J_m, not
+    # a difference of two numbers 1e16 times larger). Where H_m overflows (m >> x: scipy gives
+    # NaN) a_n ~ (x/2)^(2m)/(m!(m-1)!) and |c_n| < 2/(pi m |H_m|) are below the smallest double:
+    # both are 0 there, not NaN.
+    m = np.abs(n)
+    sign = np.where((n < 0) & (m % 2 == 1), -1.0, 1.0)
+    Jm, Jm1, H = special.jv(m, x), special.jv(m + 1, x), special.hankel2(m, x)
+    far = ~np.isfinite(H)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # non-finite: set to 0
+        H = np.where(far, 1.0, H)
+        LH = np.where(m == 0, -special.hankel2(1, x) / H, special.hankel2(m - 1, x) / H - m / x)
+        if eta is None:
+            num, X = (Jm, 1.0) if polarization == "s" else (m / x * Jm - Jm1, LH)
+        else:
+            r = _bessel_ratio(m, eta * x)
+            if polarization == "s":
+                num, X = eta * r * Jm - Jm1, LH - m / x + eta * r
+            else:
+                num = m / x * (1 - 1 / eta**2) * Jm - Jm1 + r / eta * Jm
+                X = LH - m / (eta**2 * x) + r / eta
+        a = num / H / X  # in this order: H X overflows at small x where a and c do not
+        c = -2j / (np.pi * x) / H / X * sign
+    if eta is None and polarization == "s":
+        c = np.zeros(n.shape, complex)  # psi = 0 on a perfect conductor
+    ok = ~far & np.isfinite(a) & np.isfinite(c)
+    return n, np.where(ok, a, 0.0), np.where(ok, c, 0.0)
+
+
+def _bessel_ratio(m, z):
+    """``J_(m+1)(z) / J_m(z)`` for orders ``m >= 0`` and complex ``z`` without overflow.
+
+    From exponentially scaled Bessel functions (``jve``) where ``J_m(z)`` is representable; where
+    it underflows (``|z| < m``), from the continued fraction ``r_m = 1 / (2(m+1)/z - r_(m+1))`` run
+    down from ``m + |z| + 60``; NaN where scipy's ``jve`` fails (``|z|`` beyond ~1e17).
+    """
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+        r = special.jve(m + 1, z) / special.jve(m, z)
+        small = ~np.isfinite(r) & (m > abs(z))
+        if small.any():
+            k = m[small].astype(float)
+            rs = np.zeros(k.shape, complex)
+            for j in range(int(abs(z)) + 60, -1, -1):
+                rs = 1 / (2 * (k + j + 1) / z - rs)
+            r[small] = rs
+    return r
 
 
 def cylinder_echo_width(
@@ -144,5 +192,7 @@ def cylinder_surface_field(ka, phi, wavelength: float = 1.0) -> np.ndarray:
     n = _orders(ka)
     # d/drho [J_n - J_n(ka)/H_n(ka) H_n] at rho = a  =  k [J_n' H_n - J_n H_n'] / H_n = k * (2j/(pi ka)) / H_n
     wr = 2j / (np.pi * ka)
-    coef = (1j ** (-n.astype(float))) * k * wr / special.hankel2(n, ka)
+    H = special.hankel2(n, ka)
+    far = ~np.isfinite(H)  # overflowed (|n| >> ka): 1/H_n is below the smallest double there
+    coef = np.where(far, 0.0, (1j ** (-n.astype(float))) * k * wr / np.where(far, 1.0, H))
     return np.exp(1j * np.multiply.outer(np.asarray(phi, float), n)) @ coef

@@ -20,7 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from scatterlab.mom.formulations import solve
+from scatterlab._checks import as_count, as_finite, as_index, as_positive
+from scatterlab.mom.formulations import _check_choices, solve
 from scatterlab.mom.incidence import TaperedWave
 from scatterlab.runtime.results import write_npz
 
@@ -178,6 +179,56 @@ def _check_angles(theta_i, theta_s):
     return theta_i, theta_s
 
 
+def _check_profile(x, y, partitions):
+    """``(x, y, partitions, points per partition)`` validated: 1-D finite profiles of equal length
+    with increasing x, and a whole number of partitions of at least 16 points each."""
+    x = as_finite(x, "x")
+    y = as_finite(y, "y")
+    if x.ndim != 1 or y.ndim != 1 or x.shape != y.shape:
+        raise ValueError(
+            f"x and y must be 1-D profiles of equal length, got shapes {x.shape} and {y.shape}"
+        )
+    if np.any(np.diff(x) <= 0):
+        raise ValueError("x must increase (a height function y(x) of an open profile)")
+    partitions = as_count(partitions, "partitions", 1)
+    if x.size // partitions < 16:
+        raise ValueError(
+            f"partitions must leave at least 16 points per partition: at most {x.size // 16} for "
+            f"{x.size} points, got {partitions}"
+        )
+    return x, y, partitions, x.size // partitions
+
+
+def _check_partitions(tasks, polarization, method):
+    """The checks each partition's solve makes that raise (sampling in each medium, taper width and
+    position), made here on every partition before any is dispatched; their warnings are left to
+    the solves."""
+    import warnings
+
+    from scatterlab.mom.efie import check_incidences, check_sampling, contour
+    from scatterlab.mom.formulations import _check_media
+    from scatterlab.mom.kernels import arclength_contour
+
+    for x, y, wavelength, theta_i, g, _, _, _, eta, _ in tasks:
+        k = 2 * np.pi / wavelength
+        length = (x[-1] - x[0]) * x.size / (x.size - 1)
+        if g > length / 4:  # before the taper's own checks, which overflow for g ~ 1e300
+            raise ValueError(
+                f"g (taper width) = {g:.4g} m is too wide for partitions of length {length:.4g} m: "
+                f"need g <= length / 4 = {length / 4:.4g} m (fewer partitions or a narrower taper)"
+            )
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the partition's solve warns
+            if eta is None and polarization == "s":
+                c = contour(x, y)
+                check_sampling(c, wavelength, 5.0)
+            else:
+                c = arclength_contour(contour(x, y))
+                _check_media(c, wavelength, eta, method, 5.0)
+        x0 = 0.5 * (x[0] + x[-1])
+        check_incidences([TaperedWave(t, g, x0=x0) for t in theta_i], c, k)
+
+
 def incoherent_scattering(
     x,
     y,
@@ -207,11 +258,13 @@ def incoherent_scattering(
     theta_s : array_like, shape (S,)
         Scattering angles in [-pi/2, pi/2] from the vertical [rad], specular at theta_i.
     partitions : int
-        The profile is cut into this many pieces of ``N // partitions`` points.
+        The profile is cut into this many pieces of ``N // partitions`` points (an integer >= 1
+        leaving at least 16 points per partition).
     g : float, optional
-        Taper width [m]; default a quarter of a partition.
-    solver : {"lu", "fb"}
-        Direct LU or forward-backward iteration.
+        Taper width [m], finite and > 0; default a quarter of a partition.
+    solver : {"lu", "fb", "fast"}
+        Direct LU, forward-backward iteration, or ``"fast"`` (s-pol perfect conductor only), as
+        :func:`~scatterlab.mom.solve`.
     executor : Executor, optional
         A :mod:`scatterlab.runtime` executor (default serial).
     checkpoint : str or os.PathLike, optional
@@ -225,18 +278,28 @@ def incoherent_scattering(
     -------
     IncoherentResult
         Angles and the partition averages, arrays (I, S) [1/rad].
+
+    Raises
+    ------
+    ValueError
+        Before any partition is solved: ``x``, ``y`` not finite 1-D profiles of equal length with
+        increasing x; ``partitions`` not an integer >= 1 leaving 16 points per partition; a
+        wavelength, taper width ``g`` or ``eta`` out of range; angles outside their ranges; an
+        unknown polarization, method or solver. Partitions' own checks (sampling, taper) raise
+        from the first one solved.
     """
     from scatterlab.runtime import get_executor
 
-    x = np.asarray(x, float)
-    y = np.asarray(y, float)
-    if partitions < 1 or x.size // partitions < 16:
-        raise ValueError("partitions must be >= 1 and leave at least 16 points per partition")
+    # everything a partition's solve would refuse is checked here, before any work is dispatched
+    x, y, partitions, n = _check_profile(x, y, partitions)
+    wavelength = float(as_positive(wavelength, "wavelength"))
     theta_i, theta_s = _check_angles(theta_i, theta_s)
-    n = x.size // partitions
+    if solver not in ("lu", "fb", "fast"):
+        raise ValueError(f"solver must be 'lu', 'fb' or 'fast', got {solver!r}")
+    _check_choices(polarization, method, solver, eta)
+    eta = None if eta is None else complex(as_index(eta, "eta"))
     dx = x[1] - x[0]
-    g = n * dx / 4 if g is None else float(g)
-    eta = None if eta is None else complex(eta)
+    g = n * dx / 4 if g is None else float(as_positive(g, "g (taper width)"))
     tasks = [
         (
             x[p * n : (p + 1) * n],
@@ -256,6 +319,7 @@ def incoherent_scattering(
     settings = _settings(wavelength, theta_i, theta_s, g, n, polarization, eta, method)
     ckpt = Path(checkpoint) if checkpoint is not None else None
     done = _load_checkpoint(ckpt, settings, digests) if ckpt is not None and ckpt.exists() else {}
+    _check_partitions(tasks, polarization, method)  # after a checkpoint's mismatch, before work
     ex = executor if executor is not None else get_executor("serial")
     todo = [p for p in range(partitions) if p not in done]
     # in chunks, so a checkpoint is written every few partitions

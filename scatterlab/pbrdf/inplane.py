@@ -168,23 +168,45 @@ def dhr_pec_1d(theta_i, sigma, shadowing: str = "torrance-sparrow") -> np.ndarra
     Gauss-Legendre (1024 nodes) in the slope over the facets that reflect above the horizon,
     cut at 12 sigma; :math:`\rho_1 = \int G\,p_1(s)\,(1 - s\tan\theta_i)\,ds`.
 
+    At grazing incidence, ``theta_i = pi/2`` exactly, the limit: only the facets facing the source
+    (``s < 0``) are lit and :math:`G\tan\theta_i` tends to a finite limit while :math:`G \to 0`,
+    so :math:`\rho_1 \to \int_{-\infty}^0 \lim G\tan\theta_i\,(-s)\,p_1(s)\,ds`. For
+    Torrance-Sparrow :math:`G \to 2\cos\alpha\cos\theta_i/\cos\beta` with :math:`\cos\beta
+    \to \sin|\alpha|`, so :math:`G\tan\theta_i\,|s| \to 2` and :math:`\rho_1 \to 2\int_{-\infty}^0
+    p_1 = 1`; for Smith :math:`\Lambda(\tan\theta_i) \to \sigma\tan\theta_i/\sqrt{2\pi}`, so
+    :math:`G\tan\theta_i \to \sqrt{2\pi}/\sigma` and :math:`\rho_1 \to (\sqrt{2\pi}/\sigma)
+    \,\sigma/\sqrt{2\pi} = 1`. Both approach 1 linearly in :math:`\pi/2 - \theta_i`. Without
+    shadowing it diverges, :math:`\rho_1 \approx 1/2 + \sigma\tan\theta_i/\sqrt{2\pi}`, which is
+    what is returned at ``theta_i = numpy.pi/2``: that double lies 6e-17 below the true pi/2, so
+    :math:`\tan\theta_i = 1.6\times10^{16}` and the result is finite (as from
+    :func:`scatterlab.pbrdf.dhr_beckmann`).
+
     Parameters
     ----------
-    theta_i : array_like [rad] in ``[0, pi/2)``
+    theta_i : array_like [rad] in ``[0, pi/2]``
     sigma : array_like -- rms slope in ``[1e-4, 5]``.
     shadowing : {"torrance-sparrow", "smith", "none"}
 
     Returns
     -------
     ndarray ``>= 0``, broadcast shape of ``theta_i`` and ``sigma``; at most 1 with shadowing
-    (module docstring).
+    (module docstring), exactly 1 at ``theta_i = pi/2``; finite everywhere (about ``2.6e15
+    sigma`` at ``pi/2`` without shadowing).
     """
     _check_shadowing(shadowing)
     ti = as_angle(theta_i, "theta_i", 0.0, np.pi / 2)
-    if np.any(ti >= np.pi / 2):
-        raise ValueError("theta_i must be below pi/2 rad (grazing incidence has no DHR)")
     sig = _sigma(sigma)
     ti, sig = np.broadcast_arrays(ti, sig)
+    grazing = ti >= np.pi / 2
+    if grazing.any():  # the limit (docstring); the quadrature below is for the other angles
+        if shadowing == "none":
+            rho = 0.5 + sig * np.tan(np.minimum(ti, np.pi / 2)) / np.sqrt(2 * np.pi)
+        else:
+            rho = np.ones(ti.shape)
+        rest = ~grazing
+        if rest.any():
+            rho[rest] = dhr_pec_1d(ti[rest], sig[rest], shadowing)
+        return rho[()]
     lo = np.maximum(np.tan((-np.pi / 2 - ti) / 2), -_TAILS * sig)[..., None]
     hi = np.minimum(np.tan((np.pi / 2 - ti) / 2), _TAILS * sig)[..., None]
     x, w = _NODES

@@ -128,3 +128,20 @@ def test_mueller_of_nan_intensities_is_a_clear_error(instrument):
         cal.mueller(B)
     with pytest.raises(ValueError, match="B .*finite"):
         cal.mueller(np.full((4, 4), np.inf))
+
+
+def test_reference_mueller_and_parameters_check_their_arguments():
+    from scatterlab.ellipsometry import reference_mueller, reference_parameters
+
+    with pytest.raises(ValueError, match=r"tau \(transmission\) must be >= 0"):
+        reference_mueller(-1, 0.5, 0.5, 0)
+    for k, bad in enumerate(([np.nan, 0.5, 0.5, 0], [1, np.nan, 0.5, 0], [1, 0.5, 0.5, np.inf])):
+        with pytest.raises(ValueError, match=("tau", "psi", "azimuth")[k]):
+            reference_mueller(*bad)
+    with pytest.raises(ValueError, match=r"kind must be one of \('polarizer', 'retarder'\)"):
+        reference_parameters(np.eye(4), "foo")
+    with pytest.raises(ValueError, match="C .*NaN"):
+        reference_parameters(np.full((4, 4), np.nan), "retarder")
+    # a retarder's eigenvalues give its parameters back (tau = 0.8, Psi = 40 deg, Delta = 1 rad)
+    M = reference_mueller(0.8, np.radians(40), 1.0, 0.3)
+    assert reference_parameters(M, "retarder") == pytest.approx((0.8, np.radians(40), 1.0))

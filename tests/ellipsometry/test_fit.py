@@ -57,3 +57,38 @@ def test_rejects_negative_std_and_elements_outside_the_unit_interval():
     fit_mueller_elements(THETA, bad, starts=((1.5, 10.0),))
     with pytest.raises(ValueError, match="starts"):
         fit_mueller_elements(THETA, y, starts=())
+
+
+BAD_BOUNDS = [
+    (((np.nan, 10), (0, 30), (0.01, 1.5)), "finite"),
+    (((0.01, 10), (0, 30)), r"shape \(3, 2\)"),
+    (((0.01, 10), (0, 30), (0.0, 1.5)), r"sigma within \[0.0001, 5\]"),
+    (((0.01, 10), (0, 30), (0.01, 100)), r"sigma within \[0.0001, 5\]"),
+    (((-5, 10), (0, 30), (0.01, 1.5)), "n_lo >= 0 and kappa_lo >= 0"),
+    (((0.01, 10), (-5, 30), (0.01, 1.5)), "n_lo >= 0 and kappa_lo >= 0"),
+    (((10, 0.01), (0, 30), (0.01, 1.5)), "lo < hi"),
+    ("box", "got .box."),
+]
+
+
+@pytest.mark.parametrize("bounds, match", BAD_BOUNDS)
+def test_bounds_are_checked_the_same_way_by_both_fits(bounds, match):
+    from scatterlab.ellipsometry import fit_pbrdf
+    from scatterlab.io import MuellerBRDF
+
+    y = model_elements(THETA, 1.5, 0.1, 0.2)
+    with pytest.raises(ValueError, match=rf"bounds must be .*{match}"):
+        fit_mueller_elements(THETA, y, bounds=bounds)
+    M = Model(0.2).mueller(1.5 - 0.1j, THETA, THETA, np.pi)
+    with pytest.raises(ValueError, match=rf"bounds must be .*{match}"):
+        fit_pbrdf(MuellerBRDF(1e-6, THETA, THETA, np.pi, M), bounds=bounds)
+
+
+def test_tiny_standard_errors_are_refused_not_overflowed():
+    """std = 1e-300 made the weights 1e300 and J^T J overflow; a standard error below the double
+    precision of elements in [-1, 1] is refused, naming std and the allowed range."""
+    y = model_elements(THETA, 1.5, 0.1, 0.2)
+    with pytest.raises(ValueError, match=r"std .* must be >= 1e-15"):
+        fit_mueller_elements(THETA, y, std=np.full_like(y, 1e-300))
+    fit = fit_mueller_elements(THETA, y, std=np.full_like(y, 1e-15))  # the floor itself: fine
+    assert [fit.n, fit.kappa, fit.sigma] == pytest.approx([1.5, 0.1, 0.2], abs=1e-6)

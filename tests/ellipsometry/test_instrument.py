@@ -73,3 +73,18 @@ def test_unphysical_states_are_pointed_out_and_physical_ones_give_no_negative_in
     for angle in rng.uniform(0, np.pi, 20):
         for M in (diattenuator(1.0, 0.0, angle), linear_retarder(angle, 2 * angle) * 0.9):
             assert good.intensities(M).min() >= -1e-12
+
+
+def test_measure_and_intensities_check_their_arguments():
+    ins = Instrument(tetrahedral_psg(), tetrahedral_psa())
+    with pytest.raises(ValueError, match="M .* must be finite"):
+        ins.measure(np.full((4, 4), np.nan), 0)
+    with pytest.raises(ValueError, match=r"M .* must have shape \(\.\.\., 4, 4\)"):
+        ins.intensities(np.eye(3))
+    for bad in (2.5, 0, np.nan, True):
+        with pytest.raises(ValueError, match="repeats must be an integer >= 1"):
+            ins.measure(np.eye(4), 0, repeats=bad)
+    with pytest.raises(ValueError, match="rng"):
+        ins.measure(np.eye(4), 1.5, noise=0.01)
+    B, s = ins.measure(np.eye(4), 0, repeats=np.int64(2))
+    np.testing.assert_allclose(B, tetrahedral_psa() @ tetrahedral_psg(), atol=1e-12)

@@ -140,3 +140,52 @@ def test_bad_arguments(tmp_path):
         )
     assert not fit.determined and np.all(np.isinf(fit.errors))
     write_mueller_brdf(tmp_path / "d.csv", data)  # the writer accepts what the fit takes
+
+
+GEOMETRIES = np.array(
+    [
+        [0.3, 0.3, np.pi],
+        [0.5, 0.5, np.pi],
+        [0.7, 0.7, np.pi],
+        [0.5, 0.3, np.pi / 2],
+        [1.0, 0.8, 2.5],
+        [0.2, 1.2, np.pi],
+    ]
+)
+
+
+@pytest.mark.parametrize("dark", [0, 3, 5])
+def test_a_dark_geometry_is_dropped_and_the_others_recover_the_truth(dark):
+    """A zero-photon geometry (F = 0) has no normalised Mueller information: weighted by its F00 it
+    used to outweigh the others a million times and pull the fit to vacuum (n = 1). It is dropped with
+    a warning, and the noise-free model data at the other five geometries give the truth back."""
+    truth = (1.5, 0.1, 0.2)
+    F = Model(truth[2]).mueller(truth[0] - 1j * truth[1], *GEOMETRIES.T)
+    F[dark] = 0.0
+    with pytest.warns(UserWarning, match=rf"dropped 1 of 6 geometries.*\[{dark}\]"):
+        fit = fit_pbrdf(MuellerBRDF(1e-6, *GEOMETRIES.T, F))
+    assert [fit.n, fit.kappa, fit.sigma] == pytest.approx(truth, abs=1e-6)
+    assert fit.options["dropped"] == [dark] and fit.residuals.shape == (5, 4, 4)
+    # normalised data: a dark row (F00 = 0 instead of 1) is dropped as well
+    N = F / np.where(F[:, :1, :1] > 0, F[:, :1, :1], 1.0)
+    with pytest.warns(UserWarning, match="dropped 1 of 6"):
+        fit = fit_pbrdf(MuellerBRDF(1e-6, *GEOMETRIES.T, N, normalised=True))
+    assert [fit.n, fit.kappa, fit.sigma] == pytest.approx(truth, abs=1e-5)
+
+
+def test_dark_data_are_refused():
+    F = np.zeros((len(GEOMETRIES), 4, 4))
+    with pytest.raises(ValueError, match=r"data \(the Mueller BRDF\) are dark at all 6 geometries"):
+        fit_pbrdf(MuellerBRDF(1e-6, *GEOMETRIES.T, F))
+    with pytest.raises(ValueError, match="dark"):
+        fit_pbrdf(MuellerBRDF(1e-6, *GEOMETRIES.T, F, np.ones_like(F)))
+    with pytest.raises(ValueError, match="dark"):
+        fit_pbrdf(MuellerBRDF(1e-6, *GEOMETRIES.T, F, normalised=True))
+
+
+def test_walkers_and_rng_are_checked_before_the_fit():
+    data = MuellerBRDF(1e-6, *GEOMETRIES.T, Model(0.2).mueller(1.5 - 0.1j, *GEOMETRIES.T))
+    with pytest.raises(ValueError, match="walkers must be an integer >= 8"):
+        fit_pbrdf(data, posterior_steps=10, walkers=2)
+    with pytest.raises(ValueError, match="rng"):
+        fit_pbrdf(data, posterior_steps=10, rng=1.5)

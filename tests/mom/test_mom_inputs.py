@@ -147,3 +147,52 @@ def test_quadrature_band_sampling_floor_and_wavenumber_are_checked():
     for k in (0.0, -1.0, np.nan):
         with pytest.raises(ValueError, match="k"):
             impedance_matrix(contour(x, y), k)
+
+
+class _NoDispatch:
+    """An executor that fails if any work reaches it: the checks must come first."""
+
+    workers = 1
+
+    def map(self, fn, tasks, desc=""):
+        raise AssertionError("work was dispatched before the arguments were checked")
+
+
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        ({"wavelength": 0.0}, "wavelength must be > 0"),
+        ({"x": "nan"}, "x must be finite"),
+        ({"x": "2d"}, "x and y must be 1-D profiles of equal length"),
+        ({"y": "short"}, "x and y must be 1-D profiles of equal length"),
+        ({"partitions": 2.5}, "partitions must be an integer >= 1"),
+        ({"partitions": 100}, "partitions must leave at least 16 points"),
+        ({"g": 0.0}, r"g \(taper width\) must be > 0"),
+        ({"g": 1e300}, r"g \(taper width\) = 1e\+300 m is too wide"),
+        ({"theta_i": [np.radians(85)]}, "taper too narrow"),
+        ({"eta": 1e6}, "points per wavelength inside"),
+        ({"eta": 1.5 + 0.1j}, "eta must have a non-positive imaginary part"),
+        ({"polarization": "x"}, "polarization must be 's'"),
+        ({"solver": "qr"}, "solver must be"),
+    ],
+)
+def test_incoherent_scattering_checks_arguments_before_dispatching(change, match):
+    x, y = rough_surface(64.0, 0.1, 0.2, 1.0, 0)
+    kw = dict(x=x, y=y, wavelength=1.0, theta_i=[0.3], theta_s=[0.0], partitions=2)
+    kw.update(change)
+    if isinstance(kw["x"], str):
+        kw["x"] = np.r_[np.nan, x[1:]] if kw["x"] == "nan" else x[None]
+        kw["y"] = y[None] if change["x"] == "2d" else y
+    if isinstance(kw["y"], str):
+        kw["y"] = y[:-5]
+    with pytest.raises(ValueError, match=match):
+        incoherent_scattering(**kw, executor=_NoDispatch())
+
+
+def test_physical_optics_refuses_unknown_polarizations():
+    from scatterlab.mom import physical_optics
+
+    x, y = rough_surface(40.0, 0.1, 0.2, 1.0, 0)
+    sol = solve(x, y, 1.0, TaperedWave(0.3, 8.0))
+    with pytest.raises(ValueError, match="polarization must be 's' .* or 'p' .*got 'x'"):
+        physical_optics(sol, TaperedWave(0.3, 8.0), "x")

@@ -388,3 +388,42 @@ def test_series_tends_to_the_perfect_conductor_as_the_index_grows(pol):
             err.append(np.max(np.abs(w - pec)) / pec.max())
     assert err[-1] < 2e-5 and err[0] / err[1] == pytest.approx(10, rel=0.05)
     assert err[1] / err[2] == pytest.approx(10, rel=0.05)
+
+
+@pytest.mark.parametrize("ka", [1e-60, 1e-200, 1e-300])
+def test_series_at_tiny_ka_follows_the_small_argument_limits(ka):
+    """ka -> 0: J_n ~ (x/2)^n/n!, Y_n ~ -(n-1)!/pi (2/x)^n, so a_n = J_n/H_n ~ -j pi (x/2)^(2n) /
+    (n! (n-1)!) (s PEC) and J_n'/H_n' ~ +j pi (x/2)^(2n)/(n! (n-1)!) (p PEC); with J_n'/J_n(z) ~
+    n/z - z/(2(n+1)), the penetrable a_n are -J_n/H_n times (m^2 - 1) x^2/(4n(n+1)) (s: the n/x
+    terms cancel) or (m^2 - 1)/(m^2 + 1) (p); on the surface c_n = 2 J_n (p PEC), J_n (s, any
+    index) and 2 m^2/(m^2 + 1) J_n (p); a_0 = 1/H_0, H_0 ~ 1 - j (2/pi)(ln(x/2) + gamma). Where
+    H_n overflows (|n| >= 7 at ka = 1e-60) the limits are below the smallest double: 0, not NaN
+    (and no warning)."""
+    x = ka
+    for pol, eta in itertools.product("sp", (None, GLASS, IRON, ALUMINIUM)):
+        n, a, c = cylinder_coefficients(ka, pol, eta)
+        assert np.all(np.isfinite(a)) and np.all(np.isfinite(c)), (pol, eta)
+        for m in range(1, 9):
+            i, j = np.flatnonzero(n == m)[0], np.flatnonzero(n == -m)[0]
+            Jn = (x / 2) ** m / special.factorial(m)  # underflows to 0 where the truth is < 1e-308
+            pec = -1j * np.pi * (x / 2) ** (2 * m) / (special.factorial(m) ** 2 / m)  # J_n / H_n
+            if eta is None:
+                ref_a = pec if pol == "s" else -pec
+                ref_c = 0.0 if pol == "s" else 2 * Jn
+            else:
+                e2 = eta**2
+                ref_a = -pec * (
+                    (e2 - 1) * x**2 / (4 * m * (m + 1)) if pol == "s" else (e2 - 1) / (e2 + 1)
+                )
+                ref_c = Jn if pol == "s" else 2 * e2 / (e2 + 1) * Jn
+            np.testing.assert_allclose(a[[i, j]], ref_a, rtol=1e-12, atol=1e-320)
+            np.testing.assert_allclose(c[i], ref_c, rtol=1e-12, atol=1e-320)
+            np.testing.assert_allclose(c[j], (-1) ** m * ref_c, rtol=1e-12, atol=1e-320)
+        if eta is None and pol == "s":
+            h0 = 1 - 2j / np.pi * (np.log(x / 2) + np.euler_gamma)
+            np.testing.assert_allclose(a[n == 0], 1 / h0, rtol=1e-12)
+    from scatterlab.mom import cylinder_surface_field
+
+    assert np.all(np.isfinite(cylinder_surface_field(ka, PHI)))
+    with pytest.raises(ValueError, match=r"ka must be >= 1e-300"):
+        cylinder_coefficients(1e-310)

@@ -116,3 +116,35 @@ def test_bad_input():
         dolp_1d(1.5 + 0.1j, 0.3, 0.3, 0.3)
     with pytest.raises(ValueError, match="diffuse"):
         dolp_1d(GLASS, 0.3, 0.3, 0.3, diffuse="reciprocal")
+
+
+@pytest.mark.parametrize("shadowing", ["torrance-sparrow", "smith"])
+@pytest.mark.parametrize("sigma", [0.05, 0.3, 1.0])
+def test_dhr_at_grazing_incidence_is_the_limit_one(shadowing, sigma):
+    """theta_i -> pi/2: G -> 0 but G tan(theta_i) has a finite limit on the lit facets (s < 0):
+    Torrance-Sparrow G tan |s| -> 2, Smith G tan -> sqrt(2 pi)/sigma, so rho_1 -> 2 int_(-inf)^0 p_1
+    = 1 and (sqrt(2 pi)/sigma) int_(-inf)^0 |s| p_1 = 1 (dhr_pec_1d's docstring). Exactly pi/2
+    gives 1; the quadrature just below approaches it linearly in the distance to grazing."""
+    assert dhr_pec_1d(np.pi / 2, sigma, shadowing) == 1.0
+    assert np.all(dhr_pec_1d([0.3, np.pi / 2], sigma, shadowing)[1] == 1.0)
+    gaps = np.radians([1e-1, 1e-2, 1e-3])
+    err = 1 - dhr_pec_1d(np.pi / 2 - gaps, sigma, shadowing)
+    assert np.all(err >= 0) and np.all(err < 5 * gaps)  # 89.9, 89.99, 89.999 deg: within 5 gap
+    assert np.all(err[1:] <= err[:-1] / 5)  # converging, O(gap)
+
+
+def test_unshadowed_dhr_at_grazing_follows_its_divergence():
+    """Without shadowing rho_1 ~ 1/2 + sigma tan(theta_i)/sqrt(2 pi) (half the lit slopes plus the
+    (1 - s tan) moment): the quadrature at 89.99 deg matches it, and numpy.pi/2 (6e-17 below the
+    true angle) gives its finite value there, as the 2-D dhr_beckmann does."""
+    from scatterlab.pbrdf import dhr_beckmann
+
+    sigma = 0.3
+    near = np.radians(89.99)
+    assert dhr_pec_1d(near, sigma, "none") == pytest.approx(
+        0.5 + sigma * np.tan(near) / np.sqrt(2 * np.pi), rel=1e-5
+    )
+    at = dhr_pec_1d(np.pi / 2, sigma, "none")
+    assert np.isfinite(at)
+    assert at == pytest.approx(0.5 + sigma * np.tan(np.pi / 2) / np.sqrt(2 * np.pi), rel=1e-12)
+    assert at == pytest.approx(dhr_beckmann(np.pi / 2, sigma, "none"), rel=1e-6)
