@@ -358,6 +358,10 @@ def test_public_random_functions_refuse_an_rng_given_wrongly_by_name(bad):
         lambda: imaging.phase_screen(8, 0.01, 0.1, rng=bad),
         lambda: imaging.painted_plate(64, rng=bad),
         lambda: sample_posterior(np.full(4, 0.5), th, th, 0.01, rng=bad, sigma=0.3),
+        lambda: mom.rough_surface(64.0, 0.1, 0.2, 1.0, bad),
+        lambda: Instrument(tetrahedral_psg(), tetrahedral_psa()).measure(
+            np.eye(4), bad, noise=0.01
+        ),
     ):
         with pytest.raises(ValueError, match="rng must be None"):
             call()

@@ -336,7 +336,7 @@ class Instrument:
         ----------
         M : array_like (..., 4, 4)
             Sample Mueller matrices.
-        rng : anything ``numpy.random.default_rng`` accepts
+        rng : None, int >= 0, SeedSequence, BitGenerator or Generator
         noise : float
             Relative Gaussian noise (of each reading or of the largest, see ``relative_to``;
             finite, >= 0).

@@ -339,7 +339,7 @@ def fit_pbrdf(
         emcee steps per walker (0: no posterior). The first half is discarded as burn-in.
     walkers : int
         emcee walkers (>= 8).
-    rng : anything ``numpy.random.default_rng`` accepts
+    rng : None, int >= 0, SeedSequence, BitGenerator or Generator
         Seeds the walkers' start and emcee's moves.
     sigma : float, optional
         Known roughness (rms facet slope, within the bounds' sigma range), e.g. from profilometry:

@@ -66,7 +66,7 @@ def simulate_painted_plate(
         Expected photo-electrons at the brightest channel pixel.
     read_noise : float
         Read noise [e- rms].
-    rng : anything ``numpy.random.default_rng`` accepts
+    rng : None, int >= 0, SeedSequence, BitGenerator or Generator
 
     Returns
     -------

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_angle, as_index, as_positive
+from scatterlab._checks import as_angle, as_index, as_positive, as_rng
 from scatterlab.fresnel import refraction_term
 from scatterlab.mom.efie import Solution
 from scatterlab.mom.surfaces import gaussian_spectrum
@@ -207,7 +207,7 @@ def compare_spm1(polarization, eta, count, length, rng, k_sigma=0.1, corr_length
     from scatterlab.mom.incidence import TaperedWave
     from scatterlab.mom.surfaces import rough_surface
 
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     k, ti = 2 * np.pi, np.radians(30)
     sigma_h = k_sigma / k
     ppw = 10 * max(1.0, abs(eta) if eta is not None else 1.0)

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_positive
+from scatterlab._checks import as_positive, as_rng
 
 __all__ = ["rough_surface", "rms_slope", "correlation_length_for_slope", "gaussian_spectrum"]
 
@@ -115,7 +115,7 @@ def rough_surface(length, dx, sigma_h, corr_length, rng):
     n = int(round(length / dx))
     if n < 8:
         raise ValueError("length must hold at least 8 samples of dx")
-    rng = np.random.default_rng(rng)
+    rng = as_rng(rng)
     k = 2 * np.pi * np.fft.rfftfreq(n, dx)
     # y_j = sum over all k_m (positive and negative) of c_m exp(i k_m x_j), E|c_m|^2 = W(k_m) dk, c_-m = c_m*:
     # the variance sums W dk over the two-sided grid, i.e. sigma_h^2
