@@ -196,3 +196,16 @@ def test_physical_optics_refuses_unknown_polarizations():
     sol = solve(x, y, 1.0, TaperedWave(0.3, 8.0))
     with pytest.raises(ValueError, match="polarization must be 's' .* or 'p' .*got 'x'"):
         physical_optics(sol, TaperedWave(0.3, 8.0), "x")
+
+
+def test_a_taper_of_exactly_a_quarter_partition_passes_the_checks():
+    """The default taper g = length / 4 of each partition passes the up-front check despite rounding:
+    perf_mom's 8 partitions of 150 wavelengths failed it by one unit in the last place (37.50000000000853
+    against 37.49999999999999). The checks pass and the work reaches the executor."""
+    from scatterlab.mom import correlation_length_for_slope, rough_surface
+
+    x, y = rough_surface(150.0 * 8, 0.1, 1.0, correlation_length_for_slope(1.0, 0.3), 0)
+    with pytest.raises(AssertionError, match="work was dispatched"):
+        incoherent_scattering(
+            x, y, 1.0, [np.radians(45)], [0.0], partitions=8, executor=_NoDispatch()
+        )
