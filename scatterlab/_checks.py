@@ -154,11 +154,40 @@ def as_rng(rng, name: str = "rng") -> np.random.Generator:
     return np.random.default_rng(rng)
 
 
-def as_azimuth(phi, name: str = "phi") -> np.ndarray:
-    """Validate azimuths in radians within ``[-2 pi, 2 pi]``.
+def as_turn(values, name: str, what: str = "angles", hint: str = "") -> np.ndarray:
+    """Validate angles in radians within a full turn either way, ``[-2 pi, 2 pi]``.
 
-    An azimuth is periodic, but one beyond a full turn is almost always given in degrees (``phi =
-    180`` for the specular plane), which would otherwise be read silently as 180 rad.
+    Azimuths and polarizer angles are periodic, but one beyond a full turn is almost always given in
+    degrees (180, or 0, 45, 90, 135), which would otherwise be read silently as radians.
+
+    Parameters
+    ----------
+    values : array_like
+        Angles [rad], any shape.
+    name : str
+        Argument name used in the error message.
+    what : str
+        What the angles are, for the message.
+    hint : str
+        Appended to the message (e.g. the value of a common geometry).
+
+    Returns
+    -------
+    ndarray of float
+        ``values`` [rad], same shape.
+    """
+    arr = as_finite(values, name)
+    if np.any(np.abs(arr) > 2 * np.pi * (1 + 1e-12)):
+        worst = float(arr.flat[int(np.argmax(np.abs(arr)))])
+        raise ValueError(
+            f"{name} must be {what} in radians in [-2 pi, 2 pi], got {worst:g} (degrees? use "
+            f"numpy.radians{hint})"
+        )
+    return arr
+
+
+def as_azimuth(phi, name: str = "phi") -> np.ndarray:
+    """Validate azimuths [rad] within ``[-2 pi, 2 pi]`` (:func:`as_turn`; ``phi = 180`` is degrees).
 
     Parameters
     ----------
@@ -172,15 +201,7 @@ def as_azimuth(phi, name: str = "phi") -> np.ndarray:
     ndarray of float
         ``phi`` [rad], same shape.
     """
-    arr = as_finite(phi, name)
-    turn = 2 * np.pi * (1 + 1e-12)
-    if np.any(np.abs(arr) > turn):
-        worst = float(arr.flat[int(np.argmax(np.abs(arr)))])
-        raise ValueError(
-            f"{name} must be in [-2 pi, 2 pi] rad (got {worst:g}: degrees? use numpy.radians; the specular "
-            f"plane is {name} = pi)"
-        )
-    return arr
+    return as_turn(phi, name, "azimuths", f"; the specular plane is {name} = pi")
 
 
 def as_positive(value, name: str, *, allow_zero: bool = False) -> np.ndarray:

@@ -533,8 +533,8 @@ def _fit_dolp(args) -> int:
 
 
 def _fit_check_lines(post, inferred: bool) -> list:
-    """The goodness of fit and every message of a posterior, one line each, for the fit-dolp summary and
-    the top of its report (beside the estimates they qualify).
+    """The goodness of fit and every message of a posterior, one line each, for the fit-dolp summary on
+    screen, under the estimates they qualify (the report has them under its table).
 
     Parameters
     ----------
@@ -551,7 +551,7 @@ def _fit_check_lines(post, inferred: bool) -> list:
     from scatterlab.inversion.posterior import FIT_P_MIN
 
     lines = []
-    g = getattr(post, "fit_check", None)
+    g = post.fit_check
     if g is not None:
         lines.append(
             f"goodness of fit under the stated DOLP errors: chi-square {g['chi2']:.4g} for {g['dof']} "

@@ -306,7 +306,10 @@ def test_an_azimuth_in_degrees_is_refused_everywhere_it_is_taken(phi):
         lambda: DolpForward(th, th, phi),
         lambda: Model(0.3).mueller(1.5, th, th, phi),
     ):
-        with pytest.raises(ValueError, match=r"phi must be in \[-2 pi, 2 pi\] rad .*degrees"):
+        with pytest.raises(
+            ValueError,
+            match=r"phi must be azimuths in radians in \[-2 pi, 2 pi\].*degrees.*phi = pi",
+        ):
             call()
 
 

@@ -70,7 +70,7 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 import scipy.fft as sfft
 
-from scatterlab._checks import as_count, as_positive
+from scatterlab._checks import as_count, as_positive, as_turn
 from scatterlab.deconvolution.priors import _dolp_update, _prior_set, map_objective
 from scatterlab.deconvolution.psf_update import PupilPhasePSF, gerchberg_saxton, resample_psf
 from scatterlab.polarization import dolp as stokes_dolp
@@ -496,7 +496,7 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
             "and set them to any finite value; 0 photons without the mask would read as a black "
             "spot of DOLP 0, which the classification takes for metal"
         )
-    th = np.asarray(angles, float).ravel()
+    th = as_turn(angles, "angles", "polarizer angles").ravel()
     K = d.shape[0]
     if th.size != K:
         raise ValueError(f"angles has {th.size} entries for {K} channels")
@@ -514,11 +514,6 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
         raise ValueError(
             "censor (a full well) works with psf_mode 'em', 'pupil' or 'fixed', not 'phase' (its "
             "likelihood has no censored term)"
-        )
-    if np.any(np.abs(th) > 2 * np.pi):
-        raise ValueError(
-            f"angles must be polarizer angles in radians, got values up to {np.abs(th).max():g} "
-            "(degrees? use numpy.radians)"
         )
     weight = opts.polarization.prior_weight
     if not (np.isfinite(weight) and weight >= 0):

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_finite, as_rng
+from scatterlab._checks import as_finite, as_rng, as_turn
 from scatterlab.polarization import dolp_aop
 
 __all__ = [
@@ -44,43 +44,8 @@ ANGLES_0_60_120 = np.radians([0.0, 60.0, 120.0])
 # [e-] the largest mean signal and mean dark count of a pixel: numpy's Poisson sampler refuses means
 # above 9.2e18 (its int64 range), and the two means add
 _MAX_MEAN = 1e18
-# [rad] the largest |polarizer angle| accepted: a full turn, as scatterlab.deconvolution.blind_deconvolve
-# (a list such as 0, 45, 90, 135 is in degrees)
-_MAX_ANGLE = 2 * np.pi
 # relative round-off allowed in the checks of Stokes images and PSFs (S0 >= |(S1, S2)|, h >= 0, sum h = 1)
 _ROUNDING = 1e-9
-
-
-def _polarizer_angles(angles, name: str = "angles") -> np.ndarray:
-    """Check polarizer angles [rad]: finite and within a full turn, ``|a| <= 2 pi``.
-
-    Angles beyond a full turn are almost always degrees (0, 45, 90, 135), which would otherwise be
-    read silently as radians and give a wrong analyzer matrix.
-
-    Parameters
-    ----------
-    angles : array_like, shape (K,)
-        Polarizer angles [rad] from the s axis.
-    name : str
-        Argument name used in the error message.
-
-    Returns
-    -------
-    ndarray, shape (K,)
-        The angles [rad] (flattened).
-
-    Raises
-    ------
-    ValueError
-        A non-finite angle or one outside ``[-2 pi, 2 pi]``.
-    """
-    a = as_finite(angles, name).ravel()
-    if np.any(np.abs(a) > _MAX_ANGLE * (1 + 1e-12)):
-        raise ValueError(
-            f"{name} must be polarizer angles in radians in [-2 pi, 2 pi], got values up to "
-            f"{np.abs(a).max():g} (degrees? use numpy.radians)"
-        )
-    return a
 
 
 def analyzer_matrix(angles) -> np.ndarray:
@@ -102,7 +67,7 @@ def analyzer_matrix(angles) -> np.ndarray:
     ValueError
         Angles outside ``[-2 pi, 2 pi]`` (degrees?) or fewer than three distinct orientations.
     """
-    a = _polarizer_angles(angles, "angles")
+    a = as_turn(angles, "angles", "polarizer angles").ravel()
     P = 0.5 * np.stack([np.ones_like(a), np.cos(2 * a), np.sin(2 * a)], axis=1)
     if np.linalg.matrix_rank(P) < 3:
         raise ValueError(

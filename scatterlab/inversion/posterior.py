@@ -439,28 +439,40 @@ class DolpLogPosterior:
     def infers_noise(self) -> bool:
         return self.noise is None and self.chol is None
 
-    def log_likelihood(self, f, s):
-        """Log likelihood (W,) of model DOLP ``f`` (W, M) and noise ``s`` (W,) or None."""
+    def _quadratic(self, r, v):
+        """``r^T V^-1 r`` and ``log det V`` (W,) of residuals ``r`` (W, M): V from the Cholesky factor of
+        a covariance (its log det a constant, returned as 0), else diag(``v``) (W, M) plus the shared
+        error's ``c c^T``."""
         from scipy.linalg import solve_triangular
 
-        r = f[:, self.index] - self.y
         if self.chol is not None:
             z = solve_triangular(self.chol, r.T, lower=True)
-            return -0.5 * np.sum(z * z, 0)
-        if s is None:
-            v = np.broadcast_to(self.var, r.shape)
-        else:
-            v = (
-                s[:, None] ** 2 + self.syst2
-            )  # log-uniform prior on s is uniform in log s: no Jacobian
-        out = np.sum(r * r / v + np.log(v), -1)
+            return np.sum(z * z, 0), 0.0
+        quad, logdet = np.sum(r * r / v, -1), np.sum(np.log(v), -1)
         if self.c is not None:
             # V = diag(v) + c c^T (Sherman-Morrison): r^T V^-1 r = r^T D^-1 r - (r^T D^-1 c)^2 / (1 + g),
             # log det V = log det D + log(1 + g), g = c^T D^-1 c
             g = np.sum(self.c**2 / v, -1)
             u = np.sum(r * self.c / v, -1)
-            out = out - u**2 / (1 + g) + np.log1p(g)
-        return -0.5 * out
+            quad, logdet = quad - u**2 / (1 + g), logdet + np.log1p(g)
+        return quad, logdet
+
+    def _variance(self, r, s):
+        """Diagonal error variance (W, M) for noise ``s`` (W,) or the known one (None); None with a
+        covariance."""
+        if self.chol is not None:
+            return None
+        if s is None:
+            return np.broadcast_to(self.var, r.shape)
+        return (
+            s[:, None] ** 2 + self.syst2
+        )  # log-uniform prior on s is uniform in log s: no Jacobian
+
+    def log_likelihood(self, f, s):
+        """Log likelihood (W,) of model DOLP ``f`` (W, M) and noise ``s`` (W,) or None."""
+        r = f[:, self.index] - self.y
+        quad, logdet = self._quadratic(r, self._variance(r, s))
+        return -0.5 * (quad + logdet)
 
     def chi2(self, f) -> np.ndarray:
         """Chi-square (W,) of model DOLP ``f`` (W, M) under the known error model (the Mahalanobis
@@ -474,21 +486,12 @@ class DolpLogPosterior:
         -------
         ndarray, shape (W,)
         """
-        from scipy.linalg import solve_triangular
-
         if self.infers_noise:
             raise ValueError(
                 "chi2 needs a known error model (noise or covariance), not an inferred noise"
             )
         r = f[:, self.index] - self.y
-        if self.chol is not None:
-            z = solve_triangular(self.chol, r.T, lower=True)
-            return np.sum(z * z, 0)
-        out = np.sum(r * r / self.var, -1)
-        if self.c is not None:
-            g = np.sum(self.c**2 / self.var)
-            out = out - np.sum(r * self.c / self.var, -1) ** 2 / (1 + g)
-        return out
+        return self._quadratic(r, self._variance(r, None))[0]
 
     def __call__(self, x):
         x = np.atleast_2d(x)
