@@ -102,26 +102,45 @@ def normalised_elements(M) -> np.ndarray:
     Parameters
     ----------
     M : array_like (..., 4, 4)
-        Mueller matrices (any scale).
+        Mueller matrices (any scale), finite.
 
     Returns
     -------
     ndarray (..., 4)
-        ``(M01, M11, M22, M23) / M00`` (0-based; ``m12, m22, m33, m34`` in 1-based names); NaN,
-        without a warning, where ``M00 == 0`` (no light: the ratios are undefined).
+        ``(M01, M11, M22, M23) / M00`` (0-based; ``m12, m22, m33, m34`` in 1-based names), the
+        correctly rounded ratio wherever it is a finite double, also for a subnormal ``M00``
+        (``M00 = 1e-310`` with elements of 1e-310 gives ratios near 1); NaN, without a warning,
+        where ``M00 == 0`` (no light: the ratios are undefined).
 
     Raises
     ------
     ValueError
-        If ``M`` is not of shape ``(..., 4, 4)``.
+        If ``M`` is not of shape ``(..., 4, 4)`` or not finite, or if a ratio exceeds the largest
+        double (1.8e308), e.g. ``M00 = 1e-310`` with ``M11 = 0.5``: a physical Mueller matrix has
+        ``|Mjk| <= M00``, so such an ``M00`` is not a measured intensity of that matrix.
     """
-    M = np.asarray(M, float)
+    M = as_finite(M, "M")
     if M.shape[-2:] != (4, 4):
         raise ValueError(f"M must have shape (..., 4, 4), got {M.shape}")
     m00 = M[..., 0, 0]
     dark = m00 == 0
     m00 = np.where(dark, 1.0, m00)
-    return np.stack([np.where(dark, np.nan, M[..., j, k] / m00) for j, k in ELEMENTS], -1)
+    # IEEE division is correctly rounded: it overflows only where the ratio itself is beyond the
+    # double range (finite inputs: inf marks exactly those), which is refused below
+    with np.errstate(over="ignore"):
+        out = np.stack([M[..., j, k] / m00 for j, k in ELEMENTS], -1)
+    huge = np.isinf(out)
+    if np.any(huge):
+        idx = np.argwhere(huge)[0]
+        j, k = ELEMENTS[idx[-1]]
+        where = tuple(int(i) for i in idx[:-1])
+        raise ValueError(
+            f"M[{', '.join(map(str, where + (j, k)))}] / M[{', '.join(map(str, where + (0, 0)))}] = "
+            f"{M[where + (j, k)]:.6g} / {M[where + (0, 0)]:.6g} exceeds the largest double "
+            f"(1.8e308): M must have |Mjk| / M00 <= 1.8e308 (a physical Mueller matrix has "
+            f"|Mjk| <= M00)"
+        )
+    return np.where(dark[..., None], np.nan, out)
 
 
 def model_elements(

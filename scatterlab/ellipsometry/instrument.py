@@ -41,6 +41,7 @@ __all__ = [
     "tetrahedral_psa",
     "Instrument",
     "condition_number",
+    "NOISE_MAX",
 ]
 
 
@@ -233,6 +234,23 @@ def _mueller(M) -> np.ndarray:
     return M
 
 
+NOISE_MAX = 1.0
+"""Largest relative noise of :meth:`Instrument.measure`: a standard deviation equal to the reading."""
+
+
+def _noise_level(noise) -> float:
+    """``noise`` as a float in ``[0, NOISE_MAX]``, else a ValueError naming it and the range."""
+    if np.ndim(noise) != 0:
+        raise ValueError(f"noise must be a single number in [0, {NOISE_MAX:g}], got {noise!r}")
+    value = float(as_positive(noise, "noise", allow_zero=True))
+    if value > NOISE_MAX:
+        raise ValueError(
+            f"noise must be in [0, {NOISE_MAX:g}] (a relative standard deviation: 1 is noise as "
+            f"large as the reading itself), got {value:g}"
+        )
+    return value
+
+
 def condition_number(X) -> float:
     """2-norm condition number of a PSG or PSA matrix.
 
@@ -257,7 +275,8 @@ class Instrument:
     measurements and its standard deviation; detector noise is Gaussian with standard deviation
     ``noise`` times each noiseless intensity (``relative_to="each"``, the default: relative noise of
     every reading) or times the largest intensity of the 4x4 measurement (``relative_to="max"``: a
-    constant noise floor), plus an optional absolute floor ``noise_floor``.
+    constant noise floor), plus an optional absolute floor ``noise_floor``; ``noise`` is in
+    ``[0, 1]`` (:data:`NOISE_MAX`).
     """
 
     W: np.ndarray
@@ -316,9 +335,18 @@ class Instrument:
         Raises
         ------
         ValueError
-            ``M`` not of shape (..., 4, 4), or NaN/inf in it.
+            ``M`` not of shape (..., 4, 4), or NaN/inf in it, or intensities beyond the largest
+            double (elements of ``M`` near 1e308).
         """
-        return self.A @ _mueller(M) @ self.W
+        M = _mueller(M)
+        with np.errstate(over="ignore", invalid="ignore"):
+            B = self.A @ M @ self.W
+        if not np.all(np.isfinite(B)):
+            raise ValueError(
+                "M (the sample Mueller matrices) is too large: its intensities A M W exceed the "
+                f"largest double (1.8e308); largest |M| = {float(np.max(np.abs(M))):.3g}"
+            )
+        return B
 
     def measure(
         self,
@@ -338,8 +366,11 @@ class Instrument:
             Sample Mueller matrices.
         rng : None, int >= 0, SeedSequence, BitGenerator or Generator
         noise : float
-            Relative Gaussian noise (of each reading or of the largest, see ``relative_to``;
-            finite, >= 0).
+            Relative Gaussian noise: the standard deviation as a fraction of each reading or of the
+            largest (see ``relative_to``), in ``[0, 1]`` (:data:`NOISE_MAX`). At 1 the noise is
+            as large as the reading itself (with ``relative_to="each"`` a reading is then negative
+            one time in six); beyond, the readings are noise rather than a measurement, and such
+            a level (``noise=1e300`` overflowed) is refused rather than simulated.
         noise_floor : float
             Absolute noise standard deviation added to the relative one (same units as B; finite,
             >= 0).
@@ -354,13 +385,21 @@ class Instrument:
         Raises
         ------
         ValueError
-            ``M`` not a finite array of shape (..., 4, 4); ``noise`` or ``noise_floor`` negative or
-            not finite; ``repeats`` not an integer >= 1; an unknown ``relative_to``; an ``rng`` that
-            is not a seed or generator.
+            ``M`` not a finite array of shape (..., 4, 4); ``noise`` outside ``[0, 1]`` or not
+            finite; ``noise_floor`` negative or not finite; ``repeats`` not an integer >= 1; an
+            unknown ``relative_to``; an ``rng`` that is not a seed or generator; noisy readings
+            beyond the largest double (intensities or ``noise_floor`` near 1e308).
+
+        Notes
+        -----
+        The readings are ``B + s z`` with ``s = noise * ref + noise_floor`` and ``z`` standard
+        normal draws, so the mean and standard deviation are computed as ``B + s mean(z)`` and
+        ``s std(z)``: equal to those of the readings, without squaring them (no overflow for
+        readings up to the largest double).
         """
         M = _mueller(M)
         repeats = as_count(repeats, "repeats", 1)
-        noise = float(as_positive(noise, "noise", allow_zero=True))
+        noise = _noise_level(noise)
         noise_floor = float(as_positive(noise_floor, "noise_floor", allow_zero=True))
         if relative_to not in ("each", "max"):
             raise ValueError("relative_to must be 'each' or 'max'")
@@ -369,7 +408,15 @@ class Instrument:
         ref = (
             np.abs(B) if relative_to == "each" else np.max(np.abs(B), axis=(-2, -1), keepdims=True)
         )
-        scale = noise * ref + noise_floor
-        draws = B + scale * rng.standard_normal((repeats,) + B.shape)
-        std = draws.std(axis=0, ddof=1) if repeats > 1 else np.zeros_like(B)
-        return draws.mean(axis=0), std
+        z = rng.standard_normal((repeats,) + B.shape)
+        with np.errstate(over="ignore", invalid="ignore"):
+            scale = noise * ref + noise_floor
+            mean = B + scale * z.mean(axis=0)
+            std = scale * z.std(axis=0, ddof=1) if repeats > 1 else np.zeros_like(B)
+        if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(std))):
+            raise ValueError(
+                "the noisy readings exceed the largest double (1.8e308): intensities up to "
+                f"{float(np.max(np.abs(B))):.3g} with noise={noise:g} and "
+                f"noise_floor={noise_floor:g}; M or noise_floor must be smaller"
+            )
+        return mean, std

@@ -1,4 +1,5 @@
-import numpy as np
+"""Fixtures of the ellipsometry tests; shared helpers (no fixtures) are in _ecm_helpers.py."""
+
 import pytest
 
 from scatterlab.ellipsometry import (
@@ -7,10 +8,6 @@ from scatterlab.ellipsometry import (
     switched_wave_plate_psa,
     switched_wave_plate_psg,
 )
-from scatterlab.polarization import linear_polarizer, linear_retarder
-
-TRUE_AZ = np.radians([0.0, 61.5, 118.2, 46.3])  # reference orientations, a few degrees off nominal
-NOMINAL = np.radians([0.0, 60.0, 120.0, 45.0])
 
 
 @pytest.fixture
@@ -33,16 +30,3 @@ def instrument():
         )
     )
     return Instrument(psg, psa)
-
-
-def reference_samples():
-    return [linear_polarizer(a, 1e-4) * 0.9 for a in TRUE_AZ[:3]] + [
-        linear_retarder(np.radians(88), TRUE_AZ[3]) * 0.95
-    ]
-
-
-def measure_references(instrument, rng=None, noise=0.0, repeats=1):
-    B0 = instrument.measure(np.eye(4), rng, noise=noise, repeats=repeats)[0]
-    Bs = [instrument.measure(M, rng, noise=noise, repeats=repeats)[0] for M in reference_samples()]
-    kinds = ["polarizer"] * 3 + ["retarder"]
-    return B0, [(k, B, a) for k, B, a in zip(kinds, Bs, NOMINAL)]

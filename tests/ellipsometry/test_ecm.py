@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from conftest import NOMINAL, TRUE_AZ, measure_references
+from _ecm_helpers import NOMINAL, TRUE_AZ, measure_references
 
 from scatterlab.ellipsometry import Instrument, ecm_calibrate
 from scatterlab.polarization import diattenuator, is_physical_mueller, linear_retarder

@@ -1,3 +1,5 @@
+import warnings
+
 import numpy as np
 import pytest
 
@@ -92,3 +94,39 @@ def test_tiny_standard_errors_are_refused_not_overflowed():
         fit_mueller_elements(THETA, y, std=np.full_like(y, 1e-300))
     fit = fit_mueller_elements(THETA, y, std=np.full_like(y, 1e-15))  # the floor itself: fine
     assert [fit.n, fit.kappa, fit.sigma] == pytest.approx([1.5, 0.1, 0.2], abs=1e-6)
+
+
+def _in_plane(d, a, b, e, scale=1.0):
+    """A Mueller matrix of the specular-plane form with normalised elements (d, a, b, e) exactly."""
+    return scale * np.array(
+        [[1.0, d, 0.0, 0.0], [d, a, 0.0, 0.0], [0.0, 0.0, b, e], [0.0, 0.0, -e, b]]
+    )
+
+
+def test_normalised_elements_of_a_subnormal_m00_are_the_ratios_or_a_clear_error():
+    """M00 = 1e-310 (subnormal) with normal elements: the ratio exceeds the largest double, which
+    overflowed with a RuntimeWarning; now a ValueError naming M and the element. Representable ratios
+    stay correctly rounded without a warning: a matrix scaled by 1e-310 (44 bits left) or 1e300 has
+    the normalised elements it was built with, and M00 = 1e-310 with M01 = 1e-300 gives 1e10."""
+    truth = np.array([-0.3, 0.9, 0.7, 0.2])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for scale in (1e-310, 1e-300, 1.0, 1e300):
+            np.testing.assert_allclose(
+                normalised_elements(_in_plane(*truth, scale)), truth, rtol=1e-12
+            )
+        M = np.diag([1e-310, 1e-300, 0.0, 0.0])
+        M[0, 1] = 5e-301
+        np.testing.assert_allclose(normalised_elements(M), [5e9, 1e10, 0.0, 0.0], rtol=1e-12)
+        M = np.stack([np.zeros((4, 4)), _in_plane(*truth, 0.5), _in_plane(*truth, 0.5)])
+        M[2, 0, 0] = 1e-310  # no longer physical: |M01| = 0.15 > M00
+        with pytest.raises(ValueError, match=r"M\[2, 0, 1\] / M\[2, 0, 0\] .* exceeds the largest"):
+            normalised_elements(M)
+        M[2, 0, 0] = 0.0  # no light: NaN, as documented
+        out = normalised_elements(M)
+        assert np.all(np.isnan(out[[0, 2]])) and np.allclose(out[1], truth, rtol=1e-15)
+        for bad in (np.inf, np.nan):  # inf / inf was NaN with an "invalid value" warning
+            M = _in_plane(*truth)
+            M[0, 0] = M[1, 1] = bad
+            with pytest.raises(ValueError, match="M must be finite"):
+                normalised_elements(M)

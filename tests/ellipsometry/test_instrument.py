@@ -1,3 +1,5 @@
+import warnings
+
 import numpy as np
 import pytest
 
@@ -88,3 +90,43 @@ def test_measure_and_intensities_check_their_arguments():
         ins.measure(np.eye(4), 1.5, noise=0.01)
     B, s = ins.measure(np.eye(4), 0, repeats=np.int64(2))
     np.testing.assert_allclose(B, tetrahedral_psa() @ tetrahedral_psg(), atol=1e-12)
+
+
+def test_noise_is_a_relative_level_in_0_1_and_huge_readings_stay_finite():
+    """noise = 1e300 overflowed with RuntimeWarnings: noise is a relative standard deviation, refused
+    above 1 (noise as large as the reading) with a ValueError naming it and the range. Readings up to
+    ~1e305 with noise = 1 (whose squares overflowed the standard deviation) are finite and scale
+    exactly: the noise model is linear, so measuring 2^1000 M is 2^1000 times measuring M with the
+    same draws, and the std is noise |B| within its sampling error. Intensities beyond the double
+    range are a ValueError naming M."""
+    ins = Instrument(tetrahedral_psg(), tetrahedral_psa())
+    M = linear_retarder(0.6, 0.2) * 0.8
+    B = ins.intensities(M)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for bad in (1.0 + 1e-12, 2.0, 1e300):
+            with pytest.raises(ValueError, match=r"noise must be in \[0, 1\]"):
+                ins.measure(M, 0, noise=bad)
+        with pytest.raises(ValueError, match=r"noise must be a single number in \[0, 1\]"):
+            ins.measure(M, 0, noise=[0.1, 0.2])
+        big = 2.0**1000  # ~1e301, a power of two: scaling is exact
+        for relative_to in ("each", "max"):
+            mean, std = ins.measure(M, 5, noise=1.0, repeats=4000, relative_to=relative_to)
+            mean_big, std_big = ins.measure(
+                M * big, 5, noise=1.0, repeats=4000, relative_to=relative_to
+            )
+            np.testing.assert_allclose(mean_big, mean * big, rtol=1e-13, atol=1e-13 * big)
+            np.testing.assert_allclose(std_big, std * big, rtol=1e-13)
+        # 4000 draws: the std of the std is ~1.1 %
+        np.testing.assert_allclose(std_big, np.abs(B).max() * big, rtol=0.05)
+        mean, std = ins.measure(M, 6, noise_floor=1e300, repeats=4000)
+        np.testing.assert_allclose(std, 1e300, rtol=0.05)
+        with pytest.raises(ValueError, match="M .* too large: its intensities A M W exceed"):
+            ins.measure(np.eye(4) * 1e308, 0)
+        for seed in range(5):  # readings near the largest double: finite, or refused; never inf
+            try:
+                mean, std = ins.measure(np.eye(4) * 1e307, seed, noise=1.0, repeats=3)
+            except ValueError as exc:
+                assert "the noisy readings exceed the largest double" in str(exc)
+            else:
+                assert np.all(np.isfinite(mean)) and np.all(np.isfinite(std))
