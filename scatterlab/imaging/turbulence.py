@@ -19,6 +19,8 @@ r"""Atmospheric turbulence: refractive-index spectra, Fried parameter, Rytov var
   exact at small separations. Measured: the structure function averaged over many screens is within 5 % of
   6.88 (r/r0)^(5/3) from 2 px to D/2 (tests; 0.93 at 1 px); a single screen scatters widely about it
   (256 px: 5-95 % of screens at 0.77-1.40 of it at 2 px, 0.54-1.92 at 20 px).
+  An outer scale must span at least 10 pixels (:data:`MIN_OUTER_SCALE_PIXELS`): below, a growing share
+  of the phase variance (over 5 %, half at 2 px) lies beyond the grid's Nyquist frequency.
 * Extreme values: the spectra are evaluated without overflow (0 where they are below the smallest
   double, inf only where they are infinite, a ValueError where a finite value exceeds the largest);
   :func:`structure_function_theory` works in ``u = 2 pi f r``, so D(0) = 0 and r from 1e-300 m to 1e300 m.
@@ -68,6 +70,16 @@ def _positive_scalar(value, name: str) -> float:
     return float(as_positive(value, name))
 
 
+def _finite_scalar(value, name: str) -> float:
+    """A single finite number (a shift in pixels)."""
+    if np.ndim(value) != 0:
+        raise ValueError(
+            f"{name} must be a single finite number of pixels, got an array of shape "
+            f"{np.shape(value)}"
+        )
+    return float(as_finite(value, name))
+
+
 def _outer_scale(L0) -> float:
     """The outer scale [m]: > 0 or +inf (none)."""
     if np.ndim(L0) != 0 or not (L0 == np.inf or (np.isfinite(L0) and L0 > 0)):
@@ -80,6 +92,17 @@ def _inner_scale(l0) -> float:
     if np.ndim(l0) != 0 or not (np.isfinite(l0) and l0 >= 0):
         raise ValueError(f"l0 (inner scale) must be a finite length >= 0 [m], got {l0!r}")
     return float(l0)
+
+
+def _scales(L0, l0) -> tuple[float, float]:
+    """The outer and inner scales [m], checked one by one and together: ``l0 <= L0``."""
+    L0, l0 = _outer_scale(L0), _inner_scale(l0)
+    if l0 > L0:
+        raise ValueError(
+            f"l0 (inner scale) must not exceed L0 (outer scale): 0 <= l0 <= L0, got l0 = {l0:g} m "
+            f"> L0 = {L0:g} m (the inertial range between them would be empty)"
+        )
+    return L0, l0
 
 
 def _power_law(h, hscale, log_c, k, xscale, too_small):
@@ -171,7 +194,7 @@ def von_karman_psd(kappa, cn2, L0=np.inf, l0=0.0):
     L0 : float
         Outer scale [m], > 0 (``inf``: none).
     l0 : float
-        Inner scale [m], finite and >= 0 (0: none).
+        Inner scale [m], finite, >= 0 (0: none) and <= ``L0``.
 
     Returns
     -------
@@ -187,7 +210,7 @@ def von_karman_psd(kappa, cn2, L0=np.inf, l0=0.0):
     """
     kappa = as_positive(kappa, "kappa", allow_zero=True)
     c = 0.033 * _nonnegative_scalar(cn2, "cn2")
-    L0, l0 = _outer_scale(L0), _inner_scale(l0)
+    L0, l0 = _scales(L0, l0)
     if c == 0:
         return np.zeros(kappa.shape)
     # Python floats: 2 pi / L0 for L0 = 1e-320 is inf (spectrum 0), without a numpy warning
@@ -233,7 +256,7 @@ def phase_psd(f, r0, L0=np.inf, l0=0.0):
     L0 : float
         Outer scale [m], > 0 (``inf``: none).
     l0 : float
-        Inner scale [m], finite and >= 0 (0: none).
+        Inner scale [m], finite, >= 0 (0: none) and <= ``L0``.
 
     Returns
     -------
@@ -249,7 +272,7 @@ def phase_psd(f, r0, L0=np.inf, l0=0.0):
     """
     f = np.abs(as_finite(f, "f"))
     r0 = _positive_scalar(r0, "r0")
-    L0, l0 = _outer_scale(L0), _inner_scale(l0)
+    L0, l0 = _scales(L0, l0)
     f0 = 0.0 if np.isinf(L0) else 1.0 / L0  # Python floats: inf for L0 = 1e-320, without a warning
     # A r0^(-5/3) h^(-11/3) = (h / hscale)^(-11/3) with hscale = A^(3/11) r0^(-5/11): r0^(-5/3) itself may
     # overflow (r0 = 1e-200) where the spectrum does not
@@ -359,6 +382,14 @@ MIN_D_OVER_R0 = 1e-6  # below, the rms phase is under 1e-5 rad
 # step and the cell integrals of the subharmonics warn (IntegrationWarning), lose accuracy (0.84 at 3e5) and
 # give empty screens at 1e6
 MAX_L0_OVER_D = 10.0
+# the smallest outer scale in pixels, L0 / dx. The phase spectrum is flat below f = 1 / L0, so for an L0 of a
+# few pixels much of the phase variance lies beyond the grid's Nyquist frequency 1 / (2 dx), where an FFT screen
+# has no modes. Measured (400 screens of 64 px) against phase_variance_theory: the screens carry half the
+# variance at L0 = 2 dx, 0.77 at 4 dx, 0.95 at 10 dx (structure function 0.90 of the quadrature at 2 px, 0.94-0.95
+# from 4 px, comparable to the 0.93 of Kolmogorov screens at 1 px), and (L0 / dx)^2 / (1.2 pi) of it for
+# L0 << dx. The true variance tends to 0 as L0 -> 0 (~ L0^(5/3): below the smallest double at L0 = 1e-300 m),
+# but the screen's share of it tends to 0 too: below 10 px the screens are refused, not silently short.
+MIN_OUTER_SCALE_PIXELS = 10.0
 
 
 def _check_screen_args(n, dx, r0, L0, l0):
@@ -366,8 +397,15 @@ def _check_screen_args(n, dx, r0, L0, l0):
         raise ValueError("n (screen size in pixels) must be an integer >= 4")
     dx = float(as_positive(dx, "dx"))
     r0 = float(as_positive(r0, "r0"))
-    _outer_scale(L0)
-    l0 = _inner_scale(l0)
+    L0, l0 = _scales(L0, l0)
+    if L0 < MIN_OUTER_SCALE_PIXELS * dx:
+        raise ValueError(
+            f"L0 (outer scale) must be >= {MIN_OUTER_SCALE_PIXELS:g} dx = "
+            f"{MIN_OUTER_SCALE_PIXELS * dx:g} m or inf for a grid spacing dx = {dx:g} m, got L0 = "
+            f"{L0:g} m: a smaller outer scale puts a growing share of the phase variance (over 5 %, "
+            "half at 2 dx) beyond the grid's Nyquist frequency, where the screen has no modes (use "
+            "a finer grid)"
+        )
     if l0 > MAX_L0_OVER_D * n * dx:
         raise ValueError(
             f"l0 (inner scale) must be in [0, {MAX_L0_OVER_D:g} n dx] = [0, {MAX_L0_OVER_D * n * dx:g}] m "
@@ -500,12 +538,13 @@ def phase_screen(n, dx, r0, rng=None, L0=np.inf, subharmonics=True, l0=0.0):
         Fried parameter [m] (> 0).
     rng : seed or Generator
     L0 : float
-        Outer scale [m] (``inf``: Kolmogorov).
+        Outer scale [m], ``>= 10 dx`` (:data:`MIN_OUTER_SCALE_PIXELS`; a smaller one puts over 5 % of the
+        phase variance beyond the grid's Nyquist frequency) or ``inf`` (Kolmogorov).
     subharmonics : bool
         Add low-frequency subharmonics (recommended: without them the structure function falls short at
         separations above ~ n dx / 10).
     l0 : float
-        Inner scale [m], in ``[0, 10 n dx]`` (0: none; :data:`MAX_L0_OVER_D`).
+        Inner scale [m], in ``[0, 10 n dx]`` (0: none; :data:`MAX_L0_OVER_D`) and ``<= L0``.
 
     Returns
     -------
@@ -515,8 +554,8 @@ def phase_screen(n, dx, r0, rng=None, L0=np.inf, subharmonics=True, l0=0.0):
     Raises
     ------
     ValueError
-        ``n`` < 4, ``dx`` or ``r0`` <= 0, ``n dx / r0`` outside ``[1e-6, 1e6]``, ``L0`` <= 0, or ``l0``
-        outside ``[0, 10 n dx]``.
+        ``n`` < 4, ``dx`` or ``r0`` <= 0, ``n dx / r0`` outside ``[1e-6, 1e6]``, ``L0`` below
+        ``10 dx``, ``l0`` outside ``[0, 10 n dx]``, or ``l0 > L0``.
     """
     dx, r0 = _check_screen_args(n, dx, r0, L0, l0)
     rng = as_rng(rng)
@@ -564,11 +603,29 @@ class SlidingScreen:
         )
 
     def window(self, shift) -> np.ndarray:
-        """The (n, n) window starting ``shift`` pixels (float: Fourier-interpolated) along the strip."""
+        """The (n, n) window starting ``shift`` pixels along the strip.
+
+        Parameters
+        ----------
+        shift : float
+            Position along the strip [pixels], any finite number: the strip is periodic, so the
+            shift is taken modulo its length (exactly, ``math.fmod``), and a fractional shift is
+            Fourier-interpolated.
+
+        Returns
+        -------
+        ndarray (n, n)
+            Phase [rad].
+
+        Raises
+        ------
+        ValueError
+            ``shift`` not a single finite number.
+        """
         length = self.strip.shape[1]
-        if not np.isfinite(shift):
-            raise ValueError(f"shift must be a finite number of pixels, got {shift!r}")
-        if float(shift).is_integer():
+        # modulo the period first: exact, and int(1e20) + arange overflowed C longs
+        shift = math.fmod(_finite_scalar(shift, "shift"), length)
+        if shift.is_integer():
             idx = (int(shift) + np.arange(self.n)) % length
             return self.strip[:, idx]
         f = np.fft.fftfreq(length)
@@ -578,29 +635,52 @@ class SlidingScreen:
         return shifted[:, : self.n]
 
     def frames(self, count: int, step: float = 1.0) -> np.ndarray:
-        """``count`` windows ``step`` pixels apart (frozen flow), shape ``(count, n, n)``."""
+        """``count`` windows ``step`` pixels apart (frozen flow).
+
+        Parameters
+        ----------
+        count : int
+            Number of frames, >= 1.
+        step : float
+            Shift between frames [pixels], any finite number (taken modulo the strip length).
+
+        Returns
+        -------
+        ndarray (count, n, n)
+            Phase [rad].
+        """
+        count = as_count(count, "count", lo=1)
+        # modulo the strip length first (exact): k step cannot overflow
+        step = math.fmod(_finite_scalar(step, "step"), self.strip.shape[1])
         return np.stack([self.window(k * step) for k in range(count)])
 
 
 def remove_piston_tilt(phase, mask=None) -> np.ndarray:
     """Subtract the least-squares piston and tilt over ``mask`` (default: the whole screen) [rad].
 
+    Only what the mask's pixels determine is removed: with pixels in general position, piston and the
+    two tilts; with collinear pixels (a single row, column or diagonal, or two pixels) piston and the
+    tilt along their line -- the tilt across it is constant on the mask, part of the piston there;
+    with one pixel, piston alone. The result on the mask is then the residual of the least-squares fit
+    of a plane, which is unique even where the plane is not.
+
     Parameters
     ----------
     phase : array_like, shape (..., ny, nx)
         Phase screen(s) [rad], finite.
     mask : array_like of bool, shape (ny, nx), optional
-        Pixels where the fit is made (default: all), at least 3.
+        Pixels where the fit is made (default: all), at least 1.
 
     Returns
     -------
     ndarray, shape (..., ny, nx)
-        Phase with piston and tilt removed [rad]; 0 outside ``mask``.
+        Phase with piston and tilt removed [rad]; 0 outside ``mask`` (and everywhere for a mask of 1
+        or 2 pixels, or of collinear pixels on which the phase is linear).
 
     Raises
     ------
     ValueError
-        ``phase`` not finite or not at least 2-D, or ``mask`` of another shape or with fewer than 3 pixels.
+        ``phase`` not finite or not at least 2-D, or ``mask`` of another shape or empty.
     """
     phase = as_finite(phase, "phase")
     if phase.ndim < 2:
@@ -608,18 +688,38 @@ def remove_piston_tilt(phase, mask=None) -> np.ndarray:
             f"phase must be a screen (ny, nx) or a stack (..., ny, nx), got shape {phase.shape}"
         )
     ny, nx = phase.shape[-2:]
-    y, x = np.mgrid[0:ny, 0:nx]
     m = np.ones((ny, nx), bool) if mask is None else np.asarray(mask, bool)
-    if m.shape != (ny, nx) or m.sum() < 3:
+    if m.shape != (ny, nx) or not m.any():
         raise ValueError(
-            f"mask must be a boolean ({ny}, {nx}) array with at least 3 pixels (piston and two "
-            f"tilts), got shape {m.shape} with {int(m.sum())}"
+            f"mask must be a boolean ({ny}, {nx}) array with at least 1 pixel, got shape {m.shape} "
+            f"with {int(m.sum())}"
         )
-    G = np.stack([np.ones(m.sum()), x[m], y[m]], 1)
-    coef, *_ = np.linalg.lstsq(G, phase[..., m].reshape(-1, m.sum()).T, rcond=None)
-    plane = coef[0][:, None, None] + coef[1][:, None, None] * x + coef[2][:, None, None] * y
-    out = phase - plane.reshape(phase.shape)
-    return np.where(m, out, 0.0)
+    y, x = np.nonzero(m)
+    G = np.stack([np.ones(x.size), *_tilt_coordinates(x, y)], 1)
+    data = phase[..., m].reshape(-1, x.size).T  # (pixels, screens)
+    coef, *_ = np.linalg.lstsq(G, data, rcond=None)
+    out = np.zeros(phase.shape)
+    out[..., m] = (data - G @ coef).T.reshape(phase.shape[:-2] + (x.size,))
+    return out
+
+
+def _tilt_coordinates(x, y) -> list[np.ndarray]:
+    """The tilt regressors the pixels ``(x, y)`` determine, centred: ``[x, y]`` in general position,
+    the coordinate along their line if collinear, none for a single pixel. Collinearity is decided
+    exactly, in integers: ``n^2 det(cov) = (n Sxx - Sx^2)(n Syy - Sy^2) - (n Sxy - Sx Sy)^2 = 0``."""
+    n = x.size
+    sx, sy = int(x.sum()), int(y.sum())
+    cxx = n * int((x * x).sum()) - sx * sx
+    cyy = n * int((y * y).sum()) - sy * sy
+    cxy = n * int((x * y).sum()) - sx * sy
+    u, v = x - sx / n, y - sy / n
+    if cxx * cyy - cxy * cxy != 0:
+        return [u, v]
+    if cxx == 0 and cyy == 0:
+        return []
+    # the line's direction: (cxx, cxy) or (cxy, cyy), whichever is not zero (cov is rank 1)
+    dx, dy = (float(cxx), float(cxy)) if cxx else (float(cxy), float(cyy))
+    return [(u * dx + v * dy) / math.hypot(dx, dy)]
 
 
 def structure_function(screens, max_separation: int) -> tuple[np.ndarray, np.ndarray]:
@@ -736,7 +836,7 @@ def structure_function_theory(r, r0, L0=np.inf, l0=0.0) -> np.ndarray:
     L0 : float
         Outer scale [m], > 0 (``inf``: none).
     l0 : float
-        Inner scale [m], finite and >= 0 (0: none).
+        Inner scale [m], finite, >= 0 (0: none) and <= ``L0``.
 
     Returns
     -------
@@ -751,7 +851,7 @@ def structure_function_theory(r, r0, L0=np.inf, l0=0.0) -> np.ndarray:
     """
     r = np.atleast_1d(as_positive(r, "r", allow_zero=True)).ravel()
     r0 = _positive_scalar(r0, "r0")
-    L0, l0 = _outer_scale(L0), _inner_scale(l0)
+    L0, l0 = _scales(L0, l0)
     out = np.zeros(r.shape)
     saturated = None
     for i, ri in enumerate(r):
@@ -795,7 +895,7 @@ def phase_variance_theory(r0, L0, l0=0.0) -> float:
     L0 : float
         Outer scale [m], finite and > 0.
     l0 : float
-        Inner scale [m], finite and >= 0 (0: none).
+        Inner scale [m], finite, >= 0 (0: none) and <= ``L0``.
 
     Returns
     -------
@@ -809,7 +909,7 @@ def phase_variance_theory(r0, L0, l0=0.0) -> float:
         largest double (``L0 / r0`` above ~1e184).
     """
     r0 = _positive_scalar(r0, "r0")
-    L0, l0 = _outer_scale(L0), _inner_scale(l0)
+    L0, l0 = _scales(L0, l0)
     if np.isinf(L0):
         raise ValueError("the phase variance of Kolmogorov turbulence (L0 = inf) is infinite")
     lam = l0 / L0

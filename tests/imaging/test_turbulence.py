@@ -263,3 +263,104 @@ def test_structure_function_of_a_ramp_up_to_the_largest_separation():
     x = np.arange(8.0)
     D = T.structure_function(np.tile(0.3 * x, (8, 1)), 7)[1]
     np.testing.assert_allclose(D, 0.5 * (0.3 * np.arange(1, 8)) ** 2, rtol=1e-12)
+
+
+def test_sliding_screen_takes_any_finite_shift_modulo_its_length():
+    """window(1e20) raised OverflowError (int(1e20) + arange). The strip is periodic: a shift is the
+    same window as the shift modulo the length, also for a fractional shift far along the strip (whose
+    Fourier phase lost precision before the reduction)."""
+    wheel = T.SlidingScreen(16, 0.01, 0.1, rng=4, length=96, subharmonics=False)
+    with _strict():
+        np.testing.assert_array_equal(wheel.window(1e20), wheel.window(10**20 % 96))  # 64
+        np.testing.assert_array_equal(wheel.window(-1e20), wheel.window(-(10**20) % 96))
+        np.testing.assert_allclose(wheel.window(96 * 2.0**40 + 5.5), wheel.window(5.5), atol=1e-12)
+        np.testing.assert_allclose(wheel.window(5.5)[:, 1:], wheel.window(6.5)[:, :-1], atol=1e-12)
+        frames = wheel.frames(3, step=1.5e308)  # 2 step overflowed to inf: a ValueError
+        np.testing.assert_array_equal(frames[2], wheel.window(2 * int(1.5e308) % 96))
+        for call, match in (
+            (lambda: wheel.window(np.inf), "shift must be finite"),
+            (lambda: wheel.window([1.0, 2.0]), "shift must be a single finite number"),
+            (lambda: wheel.frames(0), "count must be an integer >= 1"),
+            (lambda: wheel.frames(2, np.nan), "step must be finite"),
+        ):
+            with pytest.raises(ValueError, match=match):
+                call()
+
+
+def test_outer_scale_below_10_pixels_is_refused_and_10_pixels_carries_the_variance():
+    """L0 = 1e-300 m gave all-zero screens. The truth tends to 0 too (sigma^2 = 0.0229 pi (6/5)
+    (L0/r0)^(5/3): below the smallest double, and so is the structure function), but the screens
+    carry only (L0/dx)^2 / (1.2 pi) of the variance for L0 << dx, half at 2 px: an outer scale
+    below 10 px is refused, naming L0 and the range. At 10 px, 200 screens of 64 px have 0.95 of
+    the variance of the quadrature (2 % statistical error) and its structure function within 12 %
+    from 2 px (0.90 there)."""
+    with _strict():
+        assert T.phase_variance_theory(0.1, 1e-300) == 0.0
+        np.testing.assert_array_equal(T.structure_function_theory([1e-3, 1.0], 0.1, 1e-300), 0)
+        for L0 in (1e-300, 0.01, 0.0999):
+            with pytest.raises(ValueError, match=r"L0 \(outer scale\) must be >= 10 dx = 0.1 m"):
+                T.phase_screen(16, 0.01, 0.1, rng=0, L0=L0)
+            with pytest.raises(ValueError, match=r"L0 \(outer scale\) must be >= 10 dx"):
+                T.SlidingScreen(16, 0.01, 0.1, rng=0, L0=L0)
+        rng = np.random.default_rng(11)
+        n, dx, r0, L0 = 64, 0.01, 0.1, 0.1
+        screens = np.stack([T.phase_screen(n, dx, r0, rng, L0=L0) for _ in range(200)])
+    ratio = np.var(screens) / T.phase_variance_theory(r0, L0)
+    assert 0.9 <= ratio <= 1.02, ratio
+    r, D = T.structure_function(screens, n // 2)
+    np.testing.assert_allclose(D[1:], T.structure_function_theory(r[1:] * dx, r0, L0), rtol=0.12)
+
+
+def test_inner_scale_above_the_outer_scale_is_refused_naming_both():
+    """l0 > L0 was accepted silently: the inertial range between them is empty. l0 = L0 is allowed."""
+    calls = (
+        lambda l0: T.phase_screen(16, 0.01, 0.1, rng=0, L0=0.5, l0=l0),
+        lambda l0: T.SlidingScreen(16, 0.01, 0.1, rng=0, L0=0.5, l0=l0),
+        lambda l0: T.phase_psd(1.0, 0.1, L0=0.5, l0=l0),
+        lambda l0: T.von_karman_psd(1.0, 1e-14, L0=0.5, l0=l0),
+        lambda l0: T.structure_function_theory([0.01], 0.1, L0=0.5, l0=l0),
+        lambda l0: T.phase_variance_theory(0.1, 0.5, l0=l0),
+    )
+    with _strict():
+        for call in calls:
+            with pytest.raises(ValueError, match=r"l0 \(inner scale\) must not exceed L0 \(outer"):
+                call(0.6)
+            assert np.all(np.isfinite(call(0.5) if call is not calls[1] else call(0.5).strip))
+
+
+def test_piston_tilt_over_collinear_masks_removes_the_tilt_along_the_line():
+    """Collinear pixels determine piston and the tilt along their line only (the tilt across is constant
+    there). phi = 0.3 + 0.2 x - 0.7 y + c x y: on a row y = 3 it is linear (residual 0), on the
+    diagonal x = y = t it is linear + c t^2, whose least-squares residual over t = 0..7 is
+    c (t^2 - 7 t + 7) (orthogonal to 1 and t: sums 140 - 196 + 56 and 784 - 980 + 196); one or two
+    pixels are fitted exactly (were refused); an empty mask is refused naming it."""
+    y, x = np.mgrid[0:8, 0:8]
+    c = 0.01
+    phase = 0.3 + 0.2 * x - 0.7 * y + c * x * y
+    t = np.arange(8)
+    with _strict():
+        row = np.zeros((8, 8), bool)
+        row[3] = True
+        np.testing.assert_allclose(T.remove_piston_tilt(phase, row), 0, atol=1e-13)
+        np.testing.assert_allclose(T.remove_piston_tilt(phase, row.T), 0, atol=1e-13)
+        diag = np.eye(8, dtype=bool)
+        out = T.remove_piston_tilt(np.stack([phase, 2 * phase]), diag)  # a stack of screens
+        np.testing.assert_allclose(out[0][diag], c * (t * t - 7 * t + 7), atol=1e-13)
+        np.testing.assert_allclose(out[1], 2 * out[0], atol=1e-13)
+        assert np.all(out[:, ~diag] == 0)
+        anti = np.fliplr(
+            diag
+        )  # x = 7 - t, y = t: c x y = c (7 t - t^2), residual -c (t^2 - 7 t + 7)
+        np.testing.assert_allclose(
+            T.remove_piston_tilt(phase, anti)[t, 7 - t], -c * (t * t - 7 * t + 7), atol=1e-13
+        )
+        for k in (1, 2):
+            few = np.zeros((8, 8), bool)
+            few[2, 1] = few[5, 6] = True
+            if k == 1:
+                few[5, 6] = False
+            np.testing.assert_allclose(T.remove_piston_tilt(phase, few), 0, atol=1e-13)
+        with pytest.raises(
+            ValueError, match=r"mask must be a boolean \(8, 8\) array with at least 1"
+        ):
+            T.remove_piston_tilt(phase, np.zeros((8, 8), bool))
