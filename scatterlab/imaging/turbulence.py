@@ -587,9 +587,10 @@ class SlidingScreen:
 
     def __init__(self, n, dx, r0, rng=None, *, length=None, L0=np.inf, l0=0.0, subharmonics=True):
         dx, r0 = _check_screen_args(n, dx, r0, L0, l0)
-        length = 4 * n if length is None else int(length)
-        if length < n:
-            raise ValueError("length must be >= n")
+        # a strip shorter than the window, or a fractional length (int() truncated 1.5 to 1), is refused
+        length = (
+            4 * n if length is None else as_count(length, "length", lo=n, unit=" [pixels] (>= n)")
+        )
         rng = as_rng(rng)
         self.n, self.dx = n, dx
         self.strip = _fft_field(

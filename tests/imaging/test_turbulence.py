@@ -282,6 +282,15 @@ def test_sliding_screen_takes_any_finite_shift_modulo_its_length():
             (lambda: wheel.window([1.0, 2.0]), "shift must be a single finite number"),
             (lambda: wheel.frames(0), "count must be an integer >= 1"),
             (lambda: wheel.frames(2, np.nan), "step must be finite"),
+            # int() truncated a fractional length (1.5 -> 1, then "length must be >= n" or worse)
+            (
+                lambda: T.SlidingScreen(16, 0.01, 0.1, rng=0, length=40.5),
+                "length must be an integer",
+            ),
+            (
+                lambda: T.SlidingScreen(16, 0.01, 0.1, rng=0, length=8),
+                r"length must be an integer >= 16",
+            ),
         ):
             with pytest.raises(ValueError, match=match):
                 call()
