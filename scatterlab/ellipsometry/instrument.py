@@ -400,6 +400,8 @@ class Instrument:
         M = _mueller(M)
         repeats = as_count(repeats, "repeats", 1)
         noise = _noise_level(noise)
+        if np.ndim(noise_floor) != 0:  # float() of an array was a TypeError
+            raise ValueError(f"noise_floor must be a single number >= 0, got {noise_floor!r}")
         noise_floor = float(as_positive(noise_floor, "noise_floor", allow_zero=True))
         if relative_to not in ("each", "max"):
             raise ValueError("relative_to must be 'each' or 'max'")

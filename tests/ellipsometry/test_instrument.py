@@ -109,6 +109,8 @@ def test_noise_is_a_relative_level_in_0_1_and_huge_readings_stay_finite():
                 ins.measure(M, 0, noise=bad)
         with pytest.raises(ValueError, match=r"noise must be a single number in \[0, 1\]"):
             ins.measure(M, 0, noise=[0.1, 0.2])
+        with pytest.raises(ValueError, match=r"noise_floor must be a single number >= 0"):
+            ins.measure(M, 0, noise=0.01, noise_floor=[0.1, 0.2])  # was a TypeError from float()
         big = 2.0**1000  # ~1e301, a power of two: scaling is exact
         for relative_to in ("each", "max"):
             mean, std = ins.measure(M, 5, noise=1.0, repeats=4000, relative_to=relative_to)
