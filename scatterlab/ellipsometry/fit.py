@@ -18,6 +18,7 @@ import numpy as np
 from scipy import optimize
 
 from scatterlab._checks import ETA_MAX, ETA_MIN, as_angle, as_finite, as_positive, check_starts
+from scatterlab.fresnel import mueller_matrix
 from scatterlab.pbrdf import Model
 
 __all__ = [
@@ -163,12 +164,24 @@ def model_elements(
     -------
     ndarray (N, 4)
         ``(M01, M11, M22, M23) / M00`` (see :func:`normalised_elements`); NaN where no light is
-        reflected (``eta = 1``, the index of the incidence medium: ``M00 = 0``).
+        reflected (``eta = 1``, the index of the incidence medium: ``M00 = 0``). At exactly grazing
+        ``theta = pi/2`` the specular term diverges (:meth:`scatterlab.pbrdf.Model.diverges`) and
+        dominates, so the ratios are its finite limit, those of the smooth surface's Fresnel matrix
+        at grazing incidence (``r_s = r_p = -1``: ``(0, 1, 1, 0)``), as ``Model.dolp`` returns its
+        limit there; ``Model.mueller`` holds 0 for that term, which gave the diffuse term's
+        ``(0, 0, 0, 0)``.
     """
-    F = Model(sigma, shadowing=shadowing, diffuse=diffuse).mueller(
-        n - 1j * kappa, theta, theta, np.pi
-    )
-    return normalised_elements(F)
+    model = Model(sigma, shadowing=shadowing, diffuse=diffuse)
+    eta = n - 1j * kappa
+    F = model.mueller(eta, theta, theta, np.pi)
+    out = normalised_elements(F)
+    grazing = np.broadcast_to(model.diverges(theta, theta, np.pi), out.shape[:-1])
+    if np.any(
+        grazing
+    ):  # the specular term's limit: in the specular plane, the Fresnel matrix (Eq. 55)
+        t = np.broadcast_to(theta, out.shape[:-1])[grazing]
+        out[grazing] = normalised_elements(mueller_matrix(eta, t))
+    return out
 
 
 class IndexFitMixin:

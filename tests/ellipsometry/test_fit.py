@@ -130,3 +130,23 @@ def test_normalised_elements_of_a_subnormal_m00_are_the_ratios_or_a_clear_error(
             M[0, 0] = M[1, 1] = bad
             with pytest.raises(ValueError, match="M must be finite"):
                 normalised_elements(M)
+
+
+@pytest.mark.parametrize(
+    "options",
+    [{}, {"diffuse": "none"}, {"shadowing": "none"}, {"shadowing": "smith"}],
+)
+def test_model_elements_at_exactly_grazing_are_the_limit_of_the_fresnel_matrix(options):
+    """At theta = pi/2 (the float) the specular term diverges and Model.mueller holds it at 0, so the
+    ratios were the diffuse term's (0, 0, 0, 0), or NaN without it. The specular term dominates there:
+    the ratios' limit is the Fresnel matrix's at grazing incidence, where r_s = r_p = -1 for any
+    interface (Eq. 55: (0, 1, 1, 0)), and the values just above the horizon converge to it (linearly
+    in cos theta, once it is well below 1 / |eta|: slowest for |eta| = 1e3)."""
+    for n, kappa in ((1.5, 0.01), (3.6, 5.88), (0.2, 1e3)):
+        at = model_elements(np.array([np.pi / 2]), n, kappa, 0.3, **options)[0]
+        np.testing.assert_allclose(at, [0, 1, 1, 0], atol=1e-12)
+        near = model_elements(np.pi / 2 - np.array([1e-5, 1e-6, 1e-7]), n, kappa, 0.3, **options)
+        gaps = np.abs(near - at).max(axis=1)
+        assert np.all(np.diff(gaps) < 0) and gaps[-1] < 1e-3, gaps
+    # no interface: no light, NaN as at any angle
+    assert np.all(np.isnan(model_elements(np.pi / 2, 1.0, 0.0, 0.3, **options)))
