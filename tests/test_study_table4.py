@@ -61,3 +61,24 @@ def test_change_tally_mean_averages_each_screen_over_the_cases_that_share_its_re
     # per screen: (-0.12 - 0.08) / 2 = -0.10 and (-0.08 - 0.12) / 2 = -0.10
     text = T4._change_tally({"steel": [a, b]})
     assert "on average over the 2 cases -0.100 +/- 0.000 (95 %; better)" in text
+
+
+def test_a_row_inside_a_band_wider_than_the_published_total_is_not_agreement():
+    # seed 5 of the survey (29 Nov 2026): ours 3.9 x the published 0.040, 3.0 of its u from it with
+    # Student t 3.18 for 4 screens -> "inside", which made the verdict "partly"
+    wide = T4.compare("aluminium D_r0_7.9_corrected total error", 0.040, 0.156, 0.0, 0.0387, k=3.18)
+    assert wide["inside"] and wide["band"] > 0.040
+    assert T4._row_status(wide) == "not resolved"
+    narrow = T4.compare("x", 0.040, 0.050, 0.0, 0.005, k=3.18)  # band 0.016 < 0.040
+    assert T4._row_status(narrow) == "agrees"
+    assert T4._row_status(T4.compare("x", 0.040, 0.150, 0.0, 0.005, k=3.18)) == "differs"
+
+
+def test_dominant_error_type_is_decided_only_where_the_screens_resolve_it():
+    # wrongly dielectric minus wrongly metal per screen; the text's row dominated by wrongly dielectric
+    assert T4._dominant([0.10, 0.12, 0.11, 0.09], True) == "as published"
+    assert T4._dominant([0.10, 0.12, 0.11, 0.09], False) == "opposite"
+    assert T4._dominant([-0.10, -0.12, -0.11, -0.09], False) == "as published"
+    # means of either sign within the screens' scatter: not resolved, whatever the sign of the mean
+    assert T4._dominant([0.10, -0.08, 0.05, -0.04], True) == "not resolved"
+    assert T4._dominant([0.30], True) == "not resolved"  # one screen: no interval
