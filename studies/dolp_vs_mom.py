@@ -143,6 +143,16 @@ variants are mostly undetermined at this size. Run time 21 s on a quiet
 machine (MoM 8 s; the MoM was 2 s with 2 realizations), 43-49 s under a load average of 6, and
 up to 100 s while two runs shared the 2 cores with other work (the 2-realization version took
 22-69 s then).
+
+Re-measured 29 Nov 2026 (quick, seeds 1-8, code unchanged): "own study" on all 8; mean error glass
++0.012..+0.028 (s.e. 0.003-0.005), paint +0.009..+0.026 (0.004-0.006), iron +0.040..+0.066 (0.010-0.018),
+aluminium +0.006..+0.034 (0.010-0.017); seed-to-seed sd of the mean 0.006 (glass, paint: 1.5 and 1.2 x the
+typical stated s.e., which 8 seeds pin only to about +-40 %; the 30-seed figures above are the firmer ones),
+0.009 iron and 0.010 aluminium (0.7 x). Mean beyond 2 s.e. on 8, 7, 8, 3 of 8 seeds; the rms resolved from
+zero on 5, 4, 1, 0 of 8 (else printed as an upper limit). Run time: 24 s alone with single-threaded BLAS
+(``OPENBLAS_NUM_THREADS=1``; MoM 9 s) but 81 s alone with the default BLAS threads at a load of ~3 from
+other work (MoM 64 s, 96 s CPU: OpenBLAS threads contending for the 2 cores), and 115-197 s with two runs
+in parallel: over a minute whenever the machine is shared, which this study does not control.
 """
 
 import warnings

@@ -39,6 +39,15 @@ the paint's low DOLP (0.239, under their threshold of 0.30) on aluminium, and th
 Run time on the shared 2-core machine (29 Nov 2026): quick (48 px, 40 iterations, 24 draws) 16 s alone,
 33-67 s at a load average of 5-7; full (128 px, 250 iterations, 12 draws) 138 s with ``--workers 2`` at
 load ~1.
+
+Re-measured 29 Nov 2026 (quick, seeds 1-8, code unchanged): "partly" on all 8, the limitation shown on both
+plates on every seed (aluminium 19-24 of 24 draws, steel 24 of 24); adaptive minus all-paint +0.25..+0.28
+(aluminium) and +0.21..+0.25 (steel), worse on both plates on every seed; adaptive minus fixed on steel
+-0.21..-0.25 (+/- <= 0.02), on aluminium -0.08..-0.21, resolved on 7 seeds and within the noise on seed 6
+(-0.080 +/- 0.094), so the headline's "beat fixed on 2/2 plates" reads "1/2" there: a count of interval
+decisions whose aluminium effect (about -0.14, sd 0.16 per draw, bistable) is 2-3 of a 24-draw run's
+standard errors, said in the report, not a claim a seed contradicts. Run time 24-42 s CPU (26-50 s as the
+runner measures it, 27-81 s wall, two runs sharing the 2 cores beside other work).
 """
 
 import numpy as np
