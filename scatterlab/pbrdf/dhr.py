@@ -378,7 +378,7 @@ class DHRTable:
     @classmethod
     def _u(cls, theta, sigma):
         low = theta <= np.pi / 4
-        x = np.cos(theta) / (np.sin(np.maximum(theta, 1e-300)) * sigma)
+        x = 1 / (np.tan(np.maximum(theta, 1e-300)) * sigma)  # cot/sigma (np.tan is vectorised)
         u_high = np.arctan(x / cls._X0) / np.arctan(1 / (sigma * cls._X0))
         return low, np.where(low, theta / (np.pi / 4), u_high)
 
@@ -482,17 +482,20 @@ class _Rho1D:
                 for th in (table._theta(piece, u, sigma) for piece in (0, 1))
             ]
         )
+        self._flat = self.values.ravel()
 
     def __call__(self, theta):
         theta = np.asarray(theta, float)
         low, u = self.table._u(theta, self.sigma)
-        # uniform grid: index arithmetic instead of a binary search
+        # uniform grid: index arithmetic instead of a binary search, into the flattened pieces
         n = self.u.size - 1
         x = np.clip(u, 0.0, 1.0) * n
         i = np.minimum(x.astype(np.intp), n - 1)
         f = x - i
-        piece = np.where(low, 0, 1)
-        v = self.values[piece, i] * (1 - f) + self.values[piece, i + 1] * f
+        i = np.where(low, i, i + (n + 1))
+        v = self._flat[i] * (1 - f) + self._flat[i + 1] * f
+        if self.table.strategy.conserves_energy:  # weight 1
+            return v
         return v * self.table._weight(theta, self.sigma)
 
 

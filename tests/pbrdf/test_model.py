@@ -297,10 +297,12 @@ def test_array_sigma_larger_than_one_chunk_matches_scalar_models():
 
     Scalar sigma reads rho from the 1-D cache (documented to add < 1e-8), array sigma from the 2-D table."""
     from scatterlab.pbrdf import Model
+    from scatterlab.pbrdf.model import _CHUNK
 
     rng = np.random.default_rng(3)
-    sig = rng.choice([0.1, 0.3, 0.6], size=(3000, 1))
+    sig = rng.choice([0.1, 0.3, 0.6], size=(6000, 1))
     ti = np.radians(np.r_[20, 35, 50, 65])
+    assert sig.size * ti.size > _CHUNK
     eta = 1.5 - 0.02j
     got = Model(sig).dolp(eta, ti, ti)
     F = Model(sig).mueller_linear(eta, ti, ti + 0.1, 2.0)
