@@ -41,8 +41,11 @@ six of one run at -0.41 to -0.87), which a t interval over 6-8 of them under-cov
 rough. The draws are independent (a draw's numbers do not depend on the draws before it in the process:
 checked). Run time of quick mode (4 draws; the first pays the screens' subharmonic integrals, cached for the
 others): 35 s as the runner measures it, 43 s wall, alone at load ~2.5 (default seed); 40-53 s CPU, 77-85 s
-wall while two runs shared the 2 cores at load ~4 (one draw: 18-25 s). Full mode: 4 draws, about 4 x the
-one-draw run's 260 s with ``--workers 2``, some 15-17 min (estimated, not measured since the change).
+wall while two runs shared the 2 cores at load ~4 (one draw: 18-25 s). Full mode, measured (29 Nov 2026, seed
+20101210, ``--workers 2``): 506 s (the first draw with its report 135 s, the three further draws 370 s);
+verdict "not reproduced": shrink 1.00x (95 % 0.71-1.38) and 0.90x (0.52-1.56) for aluminium at D/r0 7.9 and
+12.9, 0.92x (0.51-1.66) and 0.76x (0.30-1.94) for steel, 0.89x (0.76-1.05) pooled, every interval below 2x;
+corrected metal kappa against Table 5 aluminium -51 % (-66 to -37 %), steel +5 % (-5 to +14 %).
 """
 
 import numpy as np
