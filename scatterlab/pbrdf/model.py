@@ -67,11 +67,10 @@ import numpy as np
 from scatterlab._checks import as_angle, as_index
 from scatterlab.pbrdf.dhr import SpecularDHR, dhr_slope_quadrature
 from scatterlab.pbrdf.distributions import Beckmann, FacetDistribution
-from scatterlab.pbrdf.dolp import facet_dolp, facet_jones, facet_mueller
+from scatterlab.pbrdf.dolp import facet_dolp, facet_mueller
 from scatterlab.pbrdf.geometry import check_angles, facet_geometry, in_plane_geometry
 from scatterlab.pbrdf.shadowing import shadowing_strategy
 from scatterlab.polarization import dolp as stokes_dolp
-from scatterlab.polarization.mueller import mueller_from_jones_elements
 
 __all__ = ["Model", "PEC", "DIFFUSE", "dhr_slope_quadrature"]
 
@@ -395,9 +394,8 @@ class Model:
         if limit is not None:  # the facet's Stokes vector: the specular term dominates the limit
             mask, e, ti, tr, ph = limit
             geo = facet_geometry(ti, tr, ph, checked=True)
-            a, b, c, d, _ = facet_jones(e, geo)
             F = F.copy()
-            F[mask] = mueller_from_jones_elements(a, b, c, d, shape=(3, 1))[..., 0]
+            F[mask] = facet_mueller(e, geo, shape=(3, 1))[..., 0]  # its scale > 0: same angle
         a = 0.5 * np.arctan2(F[..., 2], F[..., 1])
         a = np.where(a <= -np.pi / 2, a + np.pi, a)
         return np.where((F[..., 1] == 0) & (F[..., 2] == 0), np.nan, a)
