@@ -15,7 +15,13 @@ from scatterlab.pbrdf.dhr import (
     dhr_table,
 )
 from scatterlab.pbrdf.distributions import Beckmann, FacetDistribution, HyperCauchy
-from scatterlab.pbrdf.dolp import dolp_smooth_facet, dolp_thilak, facet_dolp, facet_jones
+from scatterlab.pbrdf.dolp import (
+    dolp_smooth_facet,
+    dolp_thilak,
+    facet_dolp,
+    facet_jones,
+    facet_mueller,
+)
 from scatterlab.pbrdf.geometry import FacetGeometry, facet_geometry, in_plane_geometry
 from scatterlab.pbrdf.inplane import dhr_pec_1d, dolp_1d, inplane_coefficients
 from scatterlab.pbrdf.model import DIFFUSE, PEC, Model
@@ -54,6 +60,7 @@ __all__ = [
     "dolp_thilak",
     "facet_dolp",
     "facet_jones",
+    "facet_mueller",
     "dhr_pec_1d",
     "dolp_1d",
     "inplane_coefficients",

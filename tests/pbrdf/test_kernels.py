@@ -49,8 +49,7 @@ def test_facet_mueller_is_eq133_of_the_jones_elements(eta, rng):
     """The product form of Eq. 169's Mueller matrix equals Eq. 133 of facet_jones to rounding, in
     every block, at random and extreme geometries (normal, grazing, backscatter, specular plane),
     and 0 at eta = 1; in the facet's frame S0 and the DOLP are the same."""
-    from scatterlab.pbrdf import facet_geometry, facet_jones, in_plane_geometry
-    from scatterlab.pbrdf.dolp import facet_mueller
+    from scatterlab.pbrdf import facet_geometry, facet_jones, facet_mueller, in_plane_geometry
     from scatterlab.polarization.mueller import mueller_from_jones_elements
 
     edges = np.array([0, 1e-8, 0.7, np.radians(89.99), np.pi / 2])
