@@ -145,11 +145,13 @@ def test_keystone_registration_recovers_object_coordinates_and_shifts():
         s=(64, 64),
     )
     est = estimate_shift(img, moved)
-    np.testing.assert_allclose(est, -true, atol=0.15)
+    # the sub-pixel peak of a smooth image's correlation: measured within 0.004 of the Fourier shift
+    np.testing.assert_allclose(est, -true, atol=0.02)
     aligned = apply_shift(moved, est)
-    assert np.sqrt(np.mean((aligned - img)[10:-10, 10:-10] ** 2)) < 0.2 * img.std()
+    assert np.sqrt(np.mean((aligned - img)[10:-10, 10:-10] ** 2)) < 0.08 * img.std()  # 0.039
     s0, others, shift = register(moved, np.stack([moved, moved]), 0.0, reference=img)
-    np.testing.assert_allclose(shift, est) and np.testing.assert_allclose(others[0], s0)
+    np.testing.assert_allclose(shift, est)
+    np.testing.assert_allclose(others[0], s0)
     with pytest.raises(ValueError, match="theta_r"):
         keystone_correct(img, np.radians(89.5))
     with pytest.raises(ValueError, match="same shape"):

@@ -40,7 +40,8 @@ def energy(sol):
 
 @pytest.mark.parametrize("ka", [1, 5, 20])
 def test_cylinder_echo_width_matches_the_exact_series_within_1_percent_and_converges(ka):
-    """Relative L2 over 0-180 deg (1-deg steps) at 10 points per wavelength: measured 1e-3 (ka=1), 4e-4, 1e-4."""
+    """Relative L2 over 0-180 deg (1-deg steps) at 10 points per wavelength: measured 1.1e-3 (ka=1, a
+    polygon of 10 sides), 4.1e-4, 1.3e-4; at 40 points 0.36x (ka=1) to 0.005x that."""
     errs = []
     phi = np.radians(np.arange(0, 181))
     for ppw in (10, 20, 40):
@@ -49,15 +50,15 @@ def test_cylinder_echo_width_matches_the_exact_series_within_1_percent_and_conve
         ew = sol.echo_width(np.pi / 2 - phi)  # direction (sin, cos) at angle phi from +x
         ex = cylinder_echo_width(ka, phi, LAM)
         errs.append(np.linalg.norm(ew - ex) / np.linalg.norm(ex))
-    assert errs[0] < 0.01
-    assert errs[2] < errs[0]
+    assert errs[0] < 3e-3  # the issue's goal is 1 %
+    assert errs[2] < 0.5 * errs[0]
 
 
 def test_cylinder_surface_current_matches_the_series():
     x, y, t = cylinder(5, 20)
     sol = solve_tm(x, y, LAM, PlaneWave(np.pi / 2), closed=True)
     exact = cylinder_surface_field(5, t, LAM)
-    assert np.linalg.norm(sol.current - exact) / np.linalg.norm(exact) < 0.01
+    assert np.linalg.norm(sol.current - exact) / np.linalg.norm(exact) < 0.01  # measured 3.6e-3
 
 
 def test_exact_series_optical_theorem_and_backscatter_limit():
@@ -113,14 +114,14 @@ def test_flat_mirror_sends_all_power_specularly():
 
 def test_rough_pec_conserves_energy():
     """Slope 0.3 (sigma_h = 0.5 lambda, l = 2.36 lambda), 150-lambda surfaces, 10 points per wavelength:
-    within 0.5 % up to 60 deg and 2 % at 75 deg (measured: 2e-4 everywhere)."""
+    R + T = 1 within 1e-3 at 10-75 deg (measured: 1e-4 to 5.4e-4, the most at 75 deg)."""
     rng = np.random.default_rng(3)
     for _ in range(2):
         x, y = rough_surface(150, 0.1, 0.5, correlation_length_for_slope(0.5, 0.3), rng)
         angles = np.radians([10, 30, 45, 60, 75])
         sol = solve_tm(x, y, LAM, [TaperedWave(t, 150 / 4) for t in angles])
         e = energy(sol)
-        assert np.all(np.abs(e[:4] - 1) < 0.005) and abs(e[4] - 1) < 0.02
+        assert np.all(np.abs(e - 1) < 1e-3), e
 
 
 def test_physical_optics_agrees_for_gentle_slopes_and_departs_for_steep_ones():
