@@ -245,14 +245,28 @@ class StudyContext:
 
 
 def _markdown_table(metrics: dict, limit: int = 40) -> str:
-    rows = []
-    for k, v in metrics.items():
+    """The report's key numbers: the verdict and headline first, then the first ``limit`` scalar
+    metrics in the order the study recorded them, and a last line saying how many more
+    ``metrics.json`` holds (nested values are left to the file)."""
+    first = [k for k in ("verdict", "headline") if k in metrics]
+    rows, nested = [], 0
+    for k in first + [k for k in metrics if k not in first]:
+        v = metrics[k]
         if isinstance(v, (int, float, str, bool, np.generic)):
             val = f"{v:.6g}" if isinstance(v, (float, np.floating)) else str(v)
-            rows.append(f"| {k} | {val} |")
+            rows.append(f"| {k} | {val.replace('|', '/')} |")
+        else:
+            nested += 1
     if not rows:
         return ""
-    return "| metric | value |\n|---|---|\n" + "\n".join(rows[:limit]) + "\n"
+    shown = rows[: limit + len(first)]
+    more = len(rows) - len(shown)
+    note = (
+        f"\n{more} more numbers{f' and {nested} tables' if nested else ''} in `metrics.json`.\n"
+        if more or nested
+        else ""
+    )
+    return "| metric | value |\n|---|---|\n" + "\n".join(shown) + "\n" + note
 
 
 def run_study(

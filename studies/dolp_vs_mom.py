@@ -582,6 +582,7 @@ def coverage(res_fit, table, cell_list, theta_i, name, eta, draws, rng, quick=Fa
     t = dolp_model_error(th, th, table=table)
     C = dolp_model_error_covariance(th, th, table=table)
     hits = {"without": [], "with": [], "with_correlated": []}
+    open_ = {k: [] for k in hits}  # an undetermined interval: the whole range, which covers
     for noise in NOISES[-1:] if quick else NOISES:
         y = np.clip(np.abs(d0[None] + noise * rng.standard_normal((draws,) + d0.shape)), 0, 1)
         with warnings.catch_warnings():
@@ -595,7 +596,10 @@ def coverage(res_fit, table, cell_list, theta_i, name, eta, draws, rng, quick=Fa
             p = np.stack([f.n, f.kappa], -1)
             ok = ~(np.abs(p - truth) > 1.96 * f.errors[..., :2])  # NaN error: undetermined
             hits[key].append(ok.all(-1).ravel())
-    return {k: float(np.mean(np.concatenate(v))) for k, v in hits.items()}
+            open_[key].append((~np.isfinite(f.errors[..., :2])).any(-1).ravel())
+    out = {k: float(np.mean(np.concatenate(v))) for k, v in hits.items()}
+    out.update({f"undetermined_{k}": float(np.mean(np.concatenate(v))) for k, v in open_.items()})
+    return out
 
 
 def posterior_inversion(ctx, res, res_b, table, cell_list, theta_i, draws):
@@ -709,22 +713,23 @@ def render_current(ctx, cell):
     try:
         import pyvista as pv
 
+        from scatterlab.plotting import offscreen_plotter
+
         z = np.linspace(0, 4, 12)
         X, Z = np.meshgrid(x, z, indexing="ij")
         Y = np.broadcast_to(y[:, None], X.shape)
         grid = pv.StructuredGrid(X, Z, Y)
         J = np.abs(sol.current[:, 0]) / np.max(np.abs(sol.current[:, 0]))
         grid["|J| (normalised)"] = np.repeat(J[:, None], z.size, 1).ravel(order="F")
-        pl = pv.Plotter(off_screen=True, window_size=(900, 420))
-        pl.add_mesh(grid, scalars="|J| (normalised)", cmap="inferno", smooth_shading=True)
-        pl.add_text(
-            f"aluminium 1.44 - j16, slope {cell[0]}, sigma_h {cell[1]} wavelength: "
-            "|J| for s-pol at 45 deg (tapered wave)",
-            font_size=9,
-        )
-        pl.camera_position = [(-4, -14, 9), (0, 2, 0), (0, 0, 1)]
-        pl.screenshot(str(ctx.out / "lobe_3d.png"))
-        pl.close()
+        with offscreen_plotter((900, 420)) as pl:
+            pl.add_mesh(grid, scalars="|J| (normalised)", cmap="inferno", smooth_shading=True)
+            pl.add_text(
+                f"aluminium 1.44 - j16, slope {cell[0]}, sigma_h {cell[1]} wavelength: "
+                "|J| for s-pol at 45 deg (tapered wave)",
+                font_size=9,
+            )
+            pl.camera_position = [(-4, -14, 9), (0, 2, 0), (0, 0, 1)]
+            pl.screenshot(str(ctx.out / "lobe_3d.png"))
         ctx.add_image("lobe_3d")
         return True
     except Exception as exc:  # no OpenGL context: report it instead of failing the study
@@ -1276,6 +1281,10 @@ def _metrics(ctx, summary, bias, cover, energy, cell_list, theta_i, length, real
         m[f"{name}_coverage95_without_model_error"] = cover[name]["without"]
         m[f"{name}_coverage95_with_model_error"] = cover[name]["with"]
         m[f"{name}_coverage95_with_correlated_model_error"] = cover[name]["with_correlated"]
+        m[f"{name}_coverage95_undetermined_share"] = {
+            k: cover[name].get(f"undetermined_{k}", 0.0)
+            for k in ("without", "with", "with_correlated")
+        }
     for c, e in energy.items():
         m[f"pec_{c[0]}_{c[1]}"] = {k: np.asarray(v).tolist() for k, v in e.items()}
 
@@ -1467,10 +1476,21 @@ def _report_inversion(ctx, bias, cover, table_path):
         "parameter has width NaN):\n\n" + "\n".join(lines)
     )
     units = len(next(iter(bias.values()))[NOISES[0]]["bias"])  # the roughness cells
+
+    def undetermined(c):
+        shares = [c.get(f"undetermined_{k}", 0.0) for k in ("without", "with", "with_correlated")]
+        if not any(shares):
+            return ""
+        return (
+            " [undetermined, so counted as covering: "
+            + " / ".join(f"{100 * x:.0f} %" for x in shares)
+            + " of the fits]"
+        )
+
     cov = ", ".join(
         f"{n} {100 * c['without']:.0f} % -> {100 * c['with']:.0f} % "
         f"({coverage_verdict(c['with'], 0.95, units)}; {100 * c['with_correlated']:.0f} % "
-        f"correlated, {coverage_verdict(c['with_correlated'], 0.95, units)})"
+        f"correlated, {coverage_verdict(c['with_correlated'], 0.95, units)}){undetermined(c)}"
         for n, c in cover.items()
     )
     ctx.say(
@@ -1485,7 +1505,10 @@ def _report_inversion(ctx, bias, cover, table_path):
             for k in ("without", "with", "with_correlated")
         )
         + f". Nominal is 95 %; per material the verdict allows two binomial standard errors of "
-        f"its {units} roughness cells (the independent units). The shipped "
+        f"its {units} roughness cells (the independent units). A fit whose n or kappa the data "
+        "do not determine (its Laplace error infinite or NaN) has the whole range as its interval, "
+        "which covers; the bracket after a material gives how many fits were so, without / with / "
+        "correlated, since such a coverage says nothing of the interval's width. The shipped "
         f"table is {table_path.name}; this run wrote its own as dolp_mom.npz."
     )
 

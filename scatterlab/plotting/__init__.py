@@ -6,11 +6,15 @@ Nothing in the physics imports this package. The studies (``scatterlab.studies``
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+
 import numpy as np
 
 from scatterlab.polarization import dolp as stokes_dolp
 
-__all__ = ["headless_pyplot", "polar_contour", "pbrdf_lobe_png"]
+__all__ = ["headless_pyplot", "offscreen_plotter", "polar_contour", "pbrdf_lobe_png"]
 
 
 def headless_pyplot():
@@ -27,6 +31,46 @@ def headless_pyplot():
     import matplotlib.pyplot as pyplot
 
     return pyplot
+
+
+@contextlib.contextmanager
+def offscreen_plotter(window_size=(700, 560)):
+    """A pyvista ``Plotter`` that renders off screen, closed on exit.
+
+    On a Linux machine without a display (no ``DISPLAY`` or ``WAYLAND_DISPLAY``), VTK first tries
+    X, prints "bad X server connection" and then renders through EGL or OSMesa. That warning is not
+    printed here; VTK's errors are, and a rendering that fails still raises.
+
+    Parameters
+    ----------
+    window_size : tuple of int
+        Image size ``(width, height)`` [pixels].
+
+    Yields
+    ------
+    pyvista.Plotter
+    """
+    import pyvista as pv
+
+    headless = sys.platform.startswith("linux") and not (
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    )
+    logger = None
+    if headless:
+        try:
+            from vtkmodules.vtkCommonCore import vtkLogger as logger
+        except ImportError:  # an older VTK without its logger
+            logger = None
+    if logger is not None:
+        cutoff = logger.GetCurrentVerbosityCutoff()
+        logger.SetStderrVerbosity(logger.VERBOSITY_ERROR)
+    pl = pv.Plotter(off_screen=True, window_size=window_size)
+    try:
+        yield pl
+    finally:
+        pl.close()
+        if logger is not None:
+            logger.SetStderrVerbosity(cutoff)
 
 
 def polar_contour(
@@ -112,12 +156,11 @@ def pbrdf_lobe_png(
     x, y, z = r * np.sin(TR) * np.cos(PH), r * np.sin(TR) * np.sin(PH), r * np.cos(TR)
     grid = pv.StructuredGrid(x, y, z)
     grid["DOLP"] = dolp.ravel(order="F")
-    pl = pv.Plotter(off_screen=True, window_size=window_size)
-    pl.add_mesh(grid, scalars="DOLP", cmap="viridis", clim=(0, 1), smooth_shading=True)
-    pl.add_mesh(pv.Disc(inner=0, outer=1.05, c_res=60), color="lightgrey", opacity=0.3)
-    if title:
-        pl.add_text(title, font_size=10)
-    pl.camera_position = [(2.2, -2.6, 1.8), (0, 0, 0.25), (0, 0, 1)]
-    pl.screenshot(str(path))
-    pl.close()
+    with offscreen_plotter(window_size) as pl:
+        pl.add_mesh(grid, scalars="DOLP", cmap="viridis", clim=(0, 1), smooth_shading=True)
+        pl.add_mesh(pv.Disc(inner=0, outer=1.05, c_res=60), color="lightgrey", opacity=0.3)
+        if title:
+            pl.add_text(title, font_size=10)
+        pl.camera_position = [(2.2, -2.6, 1.8), (0, 0, 0.25), (0, 0, 1)]
+        pl.screenshot(str(path))
     return path
