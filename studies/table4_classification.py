@@ -105,7 +105,7 @@ def run(ctx):
     ]
     cmp, dominant = [], []
     pyplot = plt()
-    fig, axes = pyplot.subplots(1, 2, figsize=(10, 3.8), sharey=True)
+    fig, axes = pyplot.subplots(1, 2, figsize=(10, 4.4), sharey=True, layout="constrained")
     for ax, (plate, d) in zip(axes, data.items()):
         metal = (d["labels"] > 0).astype(int)
         res = {}
@@ -166,12 +166,14 @@ def run(ctx):
         )
         ctx.metrics[plate] = res
         for kind, mk, col in (("degraded", "o", "C0"), ("corrected", "s", "C1")):
-            ax.plot(
+            ax.errorbar(
                 d_r0,
                 [res[f"D_r0_{x:g}_{kind}"]["total_error"] for x in d_r0],
-                mk + "-",
+                yerr=[res[f"D_r0_{x:g}_{kind}"]["u_total"] for x in d_r0],
+                fmt=mk + "-",
                 color=col,
-                label=f"{kind} (ours, simulated)",
+                capsize=3,
+                label=f"{kind} (ours, simulated; +- u as in the table)",
             )
             ax.plot(
                 d_r0,
@@ -181,12 +183,9 @@ def run(ctx):
                 color=col,
                 label=f"{kind} (Table 4, measured)",
             )
-        ax.set(
-            title=f"{plate} plate, 50 deg",
-            xlabel="D/r0",
-            ylabel="fraction misclassified vs no turbulence",
-        )
-        ax.legend(fontsize=7)
+        ax.set(title=f"{plate} plate, 50 deg", xlabel="D/r0")
+    axes[0].set_ylabel("fraction misclassified vs no turbulence")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=2, fontsize=8)
     ctx.save_figure(fig, "table4_classification")
     ctx.say("\n".join(lines))
     change = {p: [_paired_change(ctx.metrics[p], x, sel) for x in d_r0] for p in data}
