@@ -39,11 +39,14 @@ import os
 import numpy as np
 from scipy import special
 
+from scatterlab.mom.hankel import hankel2_real
+
 __all__ = ["arclength_contour", "curvature", "hankel2", "layer_matrices"]
 
 _GL8 = np.polynomial.legendre.leggauss(8)
 _GL4 = np.polynomial.legendre.leggauss(4)
 _MAX_BAND = 30  # pulses
+_TILE = 32768  # elements per row block of the far part
 _DECAYED = (
     -40.0
 )  # Im(kR) below this: |H^(2)| < e^-40 |H^(2)| at the source; set to 0 without evaluating
@@ -66,10 +69,8 @@ def hankel2(order: int, z):
         H_order^(2)(z).
     """
     z = np.asarray(z)
-    if not np.iscomplexobj(z):
-        if order == 0:
-            return special.j0(z) - 1j * special.y0(z)
-        return special.j1(z) - 1j * special.y1(z)
+    if not np.iscomplexobj(z):  # Hankel's expansion from z = 30, Cephes below (mom.hankel)
+        return hankel2_real(order, z)
     live = z.imag >= _DECAYED
     out = np.zeros(z.shape, complex)
     zl = z[live]
@@ -298,7 +299,8 @@ def layer_matrices(c, k, *, single: bool = True, double: bool = True, band: floa
     k = complex(k) if np.iscomplexobj(k) and np.imag(k) != 0 else float(np.real(k))
     S = np.empty((N, N), complex) if single else None
     D = np.empty((N, N), complex) if double else None
-    block = max(16, min(N, int(2e6 // max(N, 1))))
+    # row blocks of about _TILE elements: the Hankel expansion's ~60 array operations run in cache
+    block = max(4, min(N, _TILE // max(N, 1)))
     starts = list(range(0, N, block))
     workers = min(len(starts), os.cpu_count() or 1)
     jobs = [slice(s0, min(N, s0 + block)) for s0 in starts]
