@@ -429,6 +429,11 @@ def _noise_model(errors, m, sampler):
     }  # the error as a floor
 
 
+EXTEND = (
+    4  # a chain that did not converge in n_steps is run again for up to this many times n_steps
+)
+
+
 def region_posteriors(
     regions, thetas, sigma, rng, *, n_steps=None, executor=None, model_error=False, bounds=None
 ) -> list:
@@ -443,7 +448,9 @@ def region_posteriors(
         Known roughness.
     rng : numpy.random.Generator
     n_steps : int, optional
-        Fixed chain length (None: until converged).
+        Chain length (None: until converged, up to the sampler's ``max_steps``). A region whose
+        chain of this length has not converged is sampled again until it converges, up to
+        :data:`EXTEND` times as long; one that still has not is flagged in its warnings.
     executor : optional
         Runs the regions in parallel.
     model_error : bool
@@ -498,8 +505,34 @@ def region_posteriors(
                     extra["correlated"] = common
             if bounds:
                 extra["bounds"] = [bounds.get(regions[k].name) for k in idx]
-            for k, p in zip(
-                idx, sample_posteriors(means[idx], thetas, thetas, noise, rng, **kw, **extra)
-            ):
+            got = sample_posteriors(means[idx], thetas, thetas, noise, rng, **kw, **extra)
+            redo = [j for j, p in enumerate(got) if n_steps is not None and not p.converged]
+            if redo:  # a fixed length too short for this posterior: run it until it converges
+                again = sample_posteriors(
+                    means[idx[redo]],
+                    thetas,
+                    thetas,
+                    noise,
+                    rng,
+                    **(kw | {"n_steps": None, "max_steps": EXTEND * n_steps}),
+                    **_regions_of(extra, redo),
+                )
+                for j, p in zip(redo, again):
+                    got[j] = p
+            for k, p in zip(idx, got):
                 posts[k] = p
     return [_summarise(r.name, p, r) for r, p in zip(regions, posts)]
+
+
+def _regions_of(extra: dict, positions: list) -> dict:
+    """The keywords of :func:`~scatterlab.inversion.sample_posteriors` for the regions at ``positions``
+    of a call: per-region arrays (leading axis: the regions) and lists cut, the rest shared."""
+    out = {}
+    for key, value in extra.items():
+        if key == "bounds":
+            out[key] = [value[j] for j in positions]
+        elif isinstance(value, np.ndarray) and value.ndim >= 2:
+            out[key] = value[positions]
+        else:
+            out[key] = value
+    return out

@@ -783,3 +783,38 @@ def test_a_corrected_dolp_held_at_a_bound_is_named_in_the_regions_notes():
     (b,) = region_posteriors([held], th, 0.3, rng, n_steps=300)
     assert not any("held at the bound" in w for w in a.warnings)
     assert any("left [0, 1] at 1 of 4 geometries" in w for w in b.warnings), b.warnings
+
+
+def test_a_region_whose_fixed_chain_did_not_converge_is_run_until_it_does():
+    """400 steps are too few for these two posteriors (the sampler alone flags both); the region
+    posteriors run them again, up to EXTEND x as long, and return converged chains without the
+    "did not converge" note."""
+    from scatterlab.characterization.estimation import RegionData, region_posteriors
+    from scatterlab.inversion import model_dolp, sample_posteriors
+
+    th = np.radians([30.0, 40.0, 50.0, 60.0])
+    regions = [
+        RegionData(
+            name, np.asarray(model_dolp(n, k, 0.3, th, th), float), e, e, np.zeros(4), 100, (n, k)
+        )
+        for name, n, k, e in (
+            ("metal", 0.61, 10.4, np.full(4, 3e-3)),
+            ("paint", 1.5, 0.1, np.full(4, 2e-3)),
+        )
+    ]
+    with pytest.warns(Warning):
+        short = sample_posteriors(
+            np.stack([r.mean for r in regions]),
+            th,
+            th,
+            None,
+            np.random.default_rng(3),
+            sigma=0.3,
+            n_steps=400,
+            systematic=np.stack([r.error for r in regions]),
+            noise_bounds=(1e-3, 0.5),
+        )
+    assert not any(p.converged for p in short)
+    out = region_posteriors(regions, th, 0.3, np.random.default_rng(3), n_steps=400)
+    assert all(e.converged for e in out)
+    assert not any("did not converge" in w for e in out for w in e.warnings)
