@@ -18,6 +18,8 @@ __all__ = [
     "as_finite",
     "broadcast",
     "check_starts",
+    "as_scalar",
+    "as_square_matrix",
 ]
 
 
@@ -300,4 +302,91 @@ def check_starts(starts, name: str = "starts"):
         raise ValueError(
             f"{name} must have n >= 0 and kappa >= 0 in every (n, kappa) pair, got {starts!r}"
         )
+    return arr
+
+
+def as_scalar(
+    value,
+    name: str,
+    lo: float = -np.inf,
+    hi: float = np.inf,
+    *,
+    open_lo: bool = False,
+    unit: str = "",
+) -> float:
+    """``value`` as one finite float in ``[lo, hi]`` (``(lo, hi]`` with ``open_lo``).
+
+    Parameters
+    ----------
+    value : float
+        The input: a real number (not a string, not an array of more than one value).
+    name : str
+        Argument name used in the error message.
+    lo, hi : float
+        Allowed range.
+    open_lo : bool
+        Exclude ``lo`` itself.
+    unit : str
+        Appended to the range in the message, e.g. ``" [rad]"``.
+
+    Returns
+    -------
+    float
+    """
+    if np.isinf(hi):
+        rng = "" if np.isinf(lo) else f" {'>' if open_lo else '>='} {lo:g}"
+    else:
+        rng = f" in {'(' if open_lo else '['}{lo:g}, {hi:g}]"
+    allowed = f"{name} must be a single finite number{rng}{unit}"
+    if isinstance(value, (str, bytes, bool, np.bool_)) or np.ndim(value) != 0:
+        raise ValueError(f"{allowed}, got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{allowed}, got {value!r}") from exc
+    if not (np.isfinite(v) and (v > lo if open_lo else v >= lo) and v <= hi):
+        raise ValueError(f"{allowed}, got {value!r}")
+    return v
+
+
+def as_square_matrix(
+    value, name: str, *, symmetric: bool = False, rtol: float = 1e-8
+) -> np.ndarray:
+    """``value`` as a float array (..., P, P) of square matrices, optionally checked symmetric.
+
+    Parameters
+    ----------
+    value : array_like (..., P, P)
+        The matrices; NaN or inf entries are allowed (the caller decides what they mean).
+    name : str
+        Argument name used in the error message.
+    symmetric : bool
+        Require ``|A - A^T| <= rtol * max|A|`` (per matrix, finite entries): symmetric within
+        rounding.
+    rtol : float
+        Relative tolerance of the symmetry check.
+
+    Returns
+    -------
+    ndarray (..., P, P)
+    """
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a numeric array (..., P, P), got {value!r}") from exc
+    if arr.ndim < 2 or arr.shape[-1] != arr.shape[-2] or arr.shape[-1] == 0:
+        raise ValueError(
+            f"{name} must be square matrices of shape (..., P, P) with P >= 1, got shape {arr.shape}"
+        )
+    if symmetric:
+        ok = np.isfinite(arr) & np.isfinite(np.swapaxes(arr, -1, -2))
+        a = np.where(ok, arr, 0.0)
+        diff = np.max(np.abs(a - np.swapaxes(a, -1, -2)), axis=(-2, -1))
+        size = np.max(np.abs(a), axis=(-2, -1))
+        if np.any(diff > rtol * size):
+            raise ValueError(
+                f"{name} must be symmetric (within {rtol:g} relative rounding); got a matrix with "
+                f"|A - A^T| = {float(np.max(diff)):.3g} against max|A| = "
+                f"{float(size.flat[int(np.argmax(diff))]):.3g}"
+            )
     return arr

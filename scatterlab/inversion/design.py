@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_angle
+from scatterlab._checks import as_angle, as_square_matrix
 from scatterlab.inversion.forward import DolpForward
 
 __all__ = ["fisher_information", "crlb", "inverse_information"]
@@ -48,7 +48,9 @@ def inverse_information(info, rcond: float = RCOND):
     Parameters
     ----------
     info : array (..., P, P)
-        Symmetric positive semi-definite information matrices (e.g. :math:`J^TJ/s^2`).
+        Symmetric positive semi-definite information matrices (e.g. :math:`J^TJ/s^2`): square,
+        at least 2-D, and symmetric within rounding (``|I - I^T| <= 1e-8 max|I|`` per matrix),
+        else a ValueError naming ``info``. Non-finite entries give NaN covariances (below).
     rcond : float
         Eigenvalues of the equilibrated matrix :math:`D^{-1}\\mathcal I D^{-1}` (:math:`D` the
         square roots
@@ -62,7 +64,7 @@ def inverse_information(info, rcond: float = RCOND):
         rows and columns of unidentifiable ones; all NaN where ``info`` is not finite.
     identifiable : ndarray of bool (..., P)
     """
-    info = np.asarray(info, float)
+    info = as_square_matrix(info, "info", symmetric=True)
     P = info.shape[-1]
     finite = np.all(np.isfinite(info), axis=(-2, -1))
     A = np.where(finite[..., None, None], info, 0.0)

@@ -35,6 +35,7 @@ from scatterlab.pbrdf.geometry import facet_geometry, polar_cos
 __all__ = ["DolpForward"]
 
 _SIGMA_TABLE = (1e-3, 2.5)
+_MODEL_SIGMA = (1e-4, 5.0)  # the rms slopes scatterlab.pbrdf.Model takes (Beckmann)
 _SIGMA_NODES = 4097
 
 
@@ -92,7 +93,9 @@ class DolpForward:
         grad = np.empty(P.shape + (2,))
         for k in range(2):
             h = 1e-6 * np.maximum(1.0, np.abs(n if k == 0 else kappa))
-            lo_n, lo_k = (n - h, kappa) if k == 0 else (n, np.maximum(kappa - h, 0.0))
+            lo_n, lo_k = (
+                (np.maximum(n - h, 0.0), kappa) if k == 0 else (n, np.maximum(kappa - h, 0.0))
+            )
             hi_n, hi_k = (n + h, kappa) if k == 0 else (n, kappa + h)
             step = (hi_n - lo_n) if k == 0 else (hi_k - lo_k)
             grad[..., k] = (f(hi_n, hi_k) - f(lo_n, lo_k)) / step[..., None]
@@ -193,17 +196,37 @@ class DolpForward:
         R = f(sigma)
         if not gradient:
             return R, None
+        # central where it can be, one-sided at the model's range of sigma (1e-4 itself is allowed:
+        # a step below it was refused by the model)
         h = 1e-6 * sigma
-        return R, (f(sigma + h) - f(sigma - h)) / (2 * h)[..., None]
+        lo = np.maximum(sigma - h, _MODEL_SIGMA[0])
+        hi = np.minimum(sigma + h, _MODEL_SIGMA[1])
+        return R, (f(hi) - f(lo)) / (hi - lo)[..., None]
 
     # -- the model --------------------------------------------------------------------------------------
     def _known(self, rows):
         R = self._fixed_fraction
         return R if rows is None or R.ndim == 1 else R[rows]
 
+    def _params(self, params) -> np.ndarray:
+        """``params`` as a float array (..., P), P = :attr:`n_params`; else a ValueError naming it."""
+        names = "(n, kappa, sigma)" if self.n_params == 3 else "(n, kappa) (sigma is known)"
+        try:
+            p = np.asarray(params, float)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"params must be numeric {names}, got {params!r}") from exc
+        if p.ndim == 0 or p.shape[-1] != self.n_params:
+            raise ValueError(
+                f"params must have shape (..., {self.n_params}): {names} along the last axis, got "
+                f"shape {p.shape}"
+            )
+        return p
+
     def __call__(self, params, rows=None) -> np.ndarray:
-        """DOLP (..., M) for parameters (..., P), P = 3 (n, kappa, sigma) or 2 (n, kappa) with sigma known."""
-        p = np.asarray(params, float)
+        """DOLP (..., M) for parameters (..., P), P = 3 (n, kappa, sigma) or 2 (n, kappa) with sigma known.
+
+        ``params`` must have exactly P values on its last axis (a ValueError otherwise)."""
+        p = self._params(params)
         Pf, _ = self.facet(p[..., 0], p[..., 1])
         R = self._known(rows) if self.n_params == 2 else self.fraction(p[..., 2])[0]
         return Pf * R
@@ -212,8 +235,10 @@ class DolpForward:
         """DOLP (..., M) and its Jacobian (..., M, P).
 
         ``rows`` selects the entries of a known per-pixel ``sigma`` (flattened) that ``params`` (N, P) belong to.
+        ``params`` must have exactly P values on its last axis (a ValueError otherwise). At a bound
+        of the model's sigma range (1e-4, 5) the sigma derivative is one-sided.
         """
-        p = np.asarray(params, float)
+        p = self._params(params)
         Pf, gf = self.facet(p[..., 0], p[..., 1], gradient=True)
         J = np.empty(Pf.shape + (self.n_params,))
         if self.n_params == 2:

@@ -61,6 +61,9 @@ DEFAULT_BOUNDS = {"n": (0.0, 5.0), "kappa": (0.0, 25.0), "sigma": (0.01, 1.5)}
 # a DOLP's standard deviation: below 1e-12 the whitened residuals overflow in squares, above 1 (the
 # whole range of a DOLP) it says nothing
 NOISE_RANGE = (1e-12, 1.0)
+# largest upper bound of n and kappa: the forward model is tested without overflow up to |eta| = 1e6
+# (the stability brief: kappa up to 1e3, |eta| up to 1e6); 1e300 overflowed in the Fresnel terms
+INDEX_MAX = 1e6
 DOLP_MARGIN = 0.05  # how far outside [0, 1] a measured DOLP may fall (noise) before it is refused
 
 
@@ -131,9 +134,13 @@ class DolpFit:
     valid : ndarray of bool -- enough finite measurements to fit.
     iterations : int
     identifiable : ndarray of bool (..., P) or None
-        Whether the data determine each parameter at the solution; an unidentifiable parameter has
-        an
-        infinite variance in ``covariance`` (NaN covariances), never a silently finite one.
+        Whether the data determine each parameter at the solution (non-singular Fisher
+        information there); an unidentifiable parameter has an infinite variance in
+        ``covariance`` (NaN covariances), never a silently finite one. Identifiable is local: a
+        value within one Laplace error of a bound (kappa = 0.03 +/- 1.3 beside kappa = 0, where the
+        DOLP is nearly stationary in kappa) is identifiable with a finite but large variance; the
+        data then do not distinguish it from the bound, and the Gaussian covariance ignores the
+        bound (:func:`~scatterlab.inversion.sample_posterior` says so in its messages).
     at_bound : ndarray of bool (..., P) or None
         Whether each parameter ended on a bound of the fit that is not a physical limit (every bound
         but kappa = 0, a lossless medium): there the value is the bound, not an estimate, and the
@@ -230,7 +237,8 @@ def parameter_bounds(bounds, P: int):
     Parameters
     ----------
     bounds : dict or None
-        ``{name: (low, high)}`` for ``"n"``, ``"kappa"``, ``"sigma"``.
+        ``{name: (low, high)}`` for ``"n"``, ``"kappa"``, ``"sigma"``: finite, ``low < high``,
+        ``0 <= n, kappa <= 1e6`` (:data:`INDEX_MAX`) and sigma within ``[1e-3, 2.5]``.
     P : int
         Number of fitted parameters (2: n, kappa; 3: with sigma).
 
@@ -257,6 +265,12 @@ def parameter_bounds(bounds, P: int):
             )
     if b["n"][0] < 0 or b["kappa"][0] < 0 or b["sigma"][0] < 1e-3 or b["sigma"][1] > 2.5:
         raise ValueError("bounds must keep n >= 0, kappa >= 0 and sigma within [1e-3, 2.5]")
+    for name in ("n", "kappa"):
+        if b[name][1] > INDEX_MAX:
+            raise ValueError(
+                f"bounds[{name!r}] must have high <= {INDEX_MAX:g} (|eta| up to about 1e6, where the "
+                f"DOLP model is evaluated without overflow), got {tuple(b[name])}"
+            )
     lo = np.array([b["n"][0], b["kappa"][0], b["sigma"][0]][:P], float)
     hi = np.array([b["n"][1], b["kappa"][1], b["sigma"][1]][:P], float)
     return lo, hi
@@ -299,7 +313,8 @@ def check_systematic(systematic, M: int):
     Parameters
     ----------
     systematic : float, array (M,) or None
-        Standard deviations (DOLP, >= 0, finite).
+        Standard deviations (DOLP, finite, in ``[0, 1]``: above 1, the whole range of a DOLP, it
+        says nothing, and 1e200 overflowed in the variances).
     M : int
         Number of geometries.
 
@@ -310,11 +325,17 @@ def check_systematic(systematic, M: int):
     """
     if systematic is None:
         return None
-    ok = np.ndim(systematic) == 0 or np.shape(systematic) == (M,)
-    t = np.broadcast_to(np.asarray(systematic, float), (M,)).copy() if ok else None
-    if t is None or not np.all(np.isfinite(t) & (t >= 0)):
+    ok = not isinstance(systematic, (str, bytes)) and (
+        np.ndim(systematic) == 0 or np.shape(systematic) == (M,)
+    )
+    try:
+        t = np.broadcast_to(np.asarray(systematic, float), (M,)).copy() if ok else None
+    except (TypeError, ValueError):
+        t = None
+    if t is None or not np.all(np.isfinite(t) & (t >= 0) & (t <= NOISE_RANGE[1])):
         raise ValueError(
-            f"systematic must be a float or an array ({M},) of standard deviations >= 0"
+            f"systematic must be a float or an array ({M},) of DOLP standard deviations in "
+            f"[0, {NOISE_RANGE[1]:g}], got {systematic!r}"
         )
     return t
 
@@ -325,7 +346,9 @@ def check_covariance(covariance, noise, M: int):
     Parameters
     ----------
     covariance : array (M, M) or None
-        Finite, symmetric (to 1e-10 relative) and positive definite (DOLP^2).
+        Finite, symmetric (to 1e-10 relative) and positive definite (DOLP^2), with variances
+        (diagonal) at most 1 and eigenvalues at least 1e-24 (standard deviations in the range of
+        ``noise``, ``[1e-12, 1]``; a smaller eigenvalue overflows the whitened fit).
     noise : object
         The caller's noise; giving both ``noise`` and ``covariance`` is a ValueError.
     M : int
@@ -348,8 +371,21 @@ def check_covariance(covariance, noise, M: int):
     if not np.allclose(C, C.T, rtol=1e-10, atol=0):
         raise ValueError("covariance must be symmetric")
     C = (C + C.T) / 2
-    if np.linalg.eigvalsh(C)[0] <= 0:
+    lo, hi = NOISE_RANGE
+    if np.max(np.diag(C)) > hi**2:
+        raise ValueError(
+            f"covariance must have variances (diagonal) <= {hi**2:g} (DOLP standard deviations <= "
+            f"{hi:g}), got {float(np.max(np.diag(C))):.3g}"
+        )
+    smallest = float(np.linalg.eigvalsh(C)[0])
+    if smallest <= 0:
         raise ValueError("covariance must be positive definite")
+    if smallest < lo**2:
+        raise ValueError(
+            f"covariance must have eigenvalues >= {lo**2:g} (DOLP standard deviations >= {lo:g}, "
+            f"as noise), got a smallest eigenvalue {smallest:.3g}; add the noise variance to its "
+            "diagonal"
+        )
     return C
 
 
@@ -451,17 +487,21 @@ def fit_dolp(
         M >= P, the number of fitted parameters.
     phi : float or array (M,) [rad], default pi (specular plane)
     sigma : float or array (...), optional
-        Known roughness; when given only (n, kappa) are fitted.
+        Known roughness; when given only (n, kappa) are fitted. Its shape must broadcast to
+        dolp's leading axes (a ValueError otherwise, before the fit runs).
     noise : float or array (...), optional
-        DOLP noise standard deviation (> 0) for the covariance (default: estimated from the
-        residuals).
+        DOLP noise standard deviation in ``[1e-12, 1]`` for the covariance (default: estimated from
+        the residuals). Its shape must broadcast to dolp's leading axes.
     systematic : float or array (M,), optional
-        Known systematic DOLP error standard deviation per geometry, added in quadrature to
+        Known systematic DOLP error standard deviation per geometry (in ``[0, 1]``), added in
+        quadrature to
         ``noise`` (which must then be a scalar) or to ``covariance``: the fit is weighted
         (generalised least squares) and the covariance is in absolute units.
     covariance : array (M, M), optional
         Full DOLP error covariance (errors correlated across geometries), used instead of ``noise``:
         residuals are whitened with its Cholesky factor. NaN entries of ``dolp`` are then refused.
+        Symmetric positive definite with variances <= 1 and eigenvalues >= 1e-24 (standard
+        deviations in the range of ``noise``), else a ValueError naming ``covariance``.
     options : FitOptions, optional
         ``bounds``, ``starts``, ``sigma0``, ``max_iter``, ``tol``; each may also be given as a
         keyword (not both).
@@ -485,9 +525,19 @@ def fit_dolp(
     P = 3 if sigma is None else 2
     starts, lo, hi = _check_fit_setup(options, ti.size, P)
     batch, M = y.shape[:-1], y.shape[-1]
+    # per-pixel arrays must broadcast to the batch (dolp's leading axes), checked before the fit runs
+    _check_batch_shape(noise, "noise", batch, y.shape)
+    if sigma is not None:
+        try:
+            sigma = np.asarray(sigma, float)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(
+                f"sigma must be a known rms slope (float or array), got {sigma!r}"
+            ) from exc
+        _check_batch_shape(sigma, "sigma", batch, y.shape)
     mask = np.isfinite(y)
     valid = mask.sum(-1) >= P
-    sig_known = None if sigma is None else np.broadcast_to(np.asarray(sigma, float), batch)
+    sig_known = None if sigma is None else np.broadcast_to(sigma, batch)
     forward = DolpForward(
         ti, tr, ph, sigma=None if sigma is None else sig_known.ravel(), **model_kw
     )
@@ -503,6 +553,23 @@ def fit_dolp(
     fit = _fit_result(forward, p, cost, done, iterations, mask, valid, noise, sig_known)
     fit.at_bound = _at_bound(p, lo, hi, valid)
     return fit
+
+
+def _check_batch_shape(value, name: str, batch: tuple, dolp_shape: tuple) -> None:
+    """A ValueError naming ``name`` unless its shape broadcasts to the batch shape (dolp's leading
+    axes)."""
+    if value is None:
+        return
+    shape = np.shape(value)
+    try:
+        ok = np.broadcast_shapes(shape, batch) == batch
+    except ValueError:
+        ok = False
+    if not ok:
+        raise ValueError(
+            f"{name} must be a float or an array that broadcasts to dolp's leading axes {batch} "
+            f"(one value per pixel; dolp has shape {dolp_shape}), got shape {shape}"
+        )
 
 
 def _at_bound(p, lo, hi, valid):
@@ -542,7 +609,7 @@ def _fit_result(forward, p, cost, done, iterations, mask, valid, noise, sig_know
     """Covariance, identifiability and the :class:`DolpFit` (NaN where a pixel is not valid)."""
     cov, identifiable = _laplace_covariance(forward, p, mask, cost, noise)
     identifiable = identifiable & valid[..., None]
-    _warn_undetermined(valid, identifiable)
+    _warn_undetermined(valid, identifiable, p)
     nan = np.where(valid, 1.0, np.nan)
     sig_out = p[..., 2] if sig_known is None else sig_known
     return DolpFit(
@@ -558,8 +625,9 @@ def _fit_result(forward, p, cost, done, iterations, mask, valid, noise, sig_know
     )
 
 
-def _warn_undetermined(valid, identifiable):
-    """An IdentifiabilityWarning naming the undetermined parameters and their pixel count."""
+def _warn_undetermined(valid, identifiable, p):
+    """An IdentifiabilityWarning naming the undetermined parameters and their pixel count (and
+    whether kappa is undetermined because it is 0, where the DOLP is stationary in it)."""
     undetermined = valid & ~np.all(identifiable, -1)
     if not np.any(undetermined):
         return
@@ -567,10 +635,17 @@ def _warn_undetermined(valid, identifiable):
     names = [
         nm for k, nm in enumerate(PARAMETER_NAMES[:P]) if np.any(valid & ~identifiable[..., k])
     ]
+    no_kappa = valid & ~identifiable[..., 1]
+    at_zero = int(np.sum(no_kappa & (p[..., 1] <= 0)))
+    why = (
+        f"; kappa = 0 at {at_zero} of them, the lossless bound, where the DOLP is stationary in kappa"
+        if at_zero
+        else ""
+    )
     warnings.warn(
         f"the data do not determine {', '.join(names)} at {int(undetermined.sum())} of "
-        f"{int(valid.sum())} fitted pixel(s) (singular Fisher information at the solution): "
-        "their variance is reported as inf; see DolpFit.identifiable",
+        f"{int(valid.sum())} fitted pixel(s) (singular Fisher information at the solution{why}): "
+        "their variance is reported as inf there; see DolpFit.identifiable",
         IdentifiabilityWarning,
         stacklevel=3,
     )

@@ -78,7 +78,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scatterlab._checks import as_angle, as_index
+from scatterlab._checks import as_angle, as_index, as_scalar, broadcast
 
 __all__ = [
     "dolp_model_error",
@@ -86,6 +86,9 @@ __all__ = [
     "model_error_table",
     "TABLE_PATH",
 ]
+
+CORRELATION_RANGE = (1e-6, 2 * np.pi)
+"""Allowed correlation angle [rad] of :func:`dolp_model_error_covariance`."""
 
 TABLE_PATH = Path(__file__).resolve().parents[1] / "data" / "model_error" / "dolp_mom.npz"
 
@@ -199,10 +202,10 @@ def dolp_model_error(
         sig = np.asarray(sigma, float)
         if not np.all(np.isfinite(sig) & (sig > 0)):
             raise ValueError("sigma must be finite and > 0 (rms facet slope)")
-    shapes = [ti.shape, tr.shape, ph.shape]
-    shapes += [] if sigma is None else [sig.shape]
-    shapes += [] if eta is None else [k.shape]
-    shape = np.broadcast_shapes(*shapes)
+    named = {"theta_i": ti, "theta_r": tr, "phi": ph}
+    named.update({} if sigma is None else {"sigma": sig})
+    named.update({} if eta is None else {"eta": k})
+    shape = broadcast(**named)[0].shape  # a mismatch names the arguments and their shapes
     ts = np.where(back, -tr, tr)
     i0, i1, wi = _interp_axis(np.asarray(t["theta_i"]), np.broadcast_to(ti, shape))
     s0, s1, ws = _interp_axis(np.asarray(t["theta_s"]), np.broadcast_to(ts, shape))
@@ -247,14 +250,18 @@ def dolp_model_error_covariance(
     theta_i, theta_r : array_like (M,) [rad]
     sigma, eta, material_class, phi, table : as :func:`dolp_model_error` (scalars for
         ``sigma`` and ``eta``).
-    correlation : float [rad] -- correlation angle c (> 0), default 20 deg.
+    correlation : float [rad] -- correlation angle c, default 20 deg; a single float in
+        ``[1e-6, 2 pi]`` rad (:data:`CORRELATION_RANGE`: below, ``d^2/c^2`` overflows; above a
+        full turn the errors are all but fully correlated anyway, and such a value is usually
+        degrees), else a ValueError.
 
     Returns
     -------
     ndarray (M, M), symmetric positive semi-definite [DOLP^2].
     """
-    if not (np.isfinite(correlation) and correlation > 0):
-        raise ValueError(f"correlation must be a finite angle > 0 [rad], got {correlation!r}")
+    correlation = as_scalar(
+        correlation, "correlation", CORRELATION_RANGE[0], CORRELATION_RANGE[1], unit=" [rad]"
+    )
     ti = np.atleast_1d(as_angle(theta_i, "theta_i")).astype(float)
     tr = np.atleast_1d(as_angle(theta_r, "theta_r")).astype(float)
     ti, tr = np.broadcast_arrays(ti, tr)

@@ -90,12 +90,13 @@ from pathlib import Path
 
 import numpy as np
 
-from scatterlab._checks import as_rng
+from scatterlab._checks import as_finite, as_rng, as_scalar
 from scatterlab.inversion.forward import DolpForward
 from scatterlab.inversion.least_squares import (
     DEFAULT_BOUNDS,
     DEFAULT_STARTS,
     DOLP_MARGIN,
+    NOISE_RANGE,
     DolpFit,
     IdentifiabilityWarning,
     check_covariance,
@@ -153,6 +154,29 @@ class ConvergenceWarning(UserWarning):
 
 # -- diagnostics
 # ---------------------------------------------------------------------------------------------
+def _check_chain(chain, name: str = "chain") -> np.ndarray:
+    """``chain`` as a finite float array (steps, walkers, P), else a ValueError naming it."""
+    arr = as_finite(chain, name)
+    if arr.ndim != 3 or 0 in arr.shape:
+        raise ValueError(
+            f"{name} must be a 3-D array (steps, walkers, P) (one column per parameter), got shape "
+            f"{arr.shape}; add an axis for a single walker or parameter"
+        )
+    return arr
+
+
+def _standardised(chain: np.ndarray) -> np.ndarray:
+    """Each parameter of ``chain`` (..., P) centred and scaled to unit standard deviation (a constant
+    one to zeros): the diagnostics are scale-invariant, and 1e160 no longer overflows in squares."""
+    P = chain.shape[-1]
+    flat = chain.reshape(-1, P)
+    big = np.max(np.abs(flat), axis=0)
+    x = flat / np.where(big > 0, big, 1.0)  # in [-1, 1] first: the moments cannot overflow
+    x = x - x.mean(0)
+    sd = x.std(0)
+    return (x / np.where(sd > 0, sd, 1.0)).reshape(chain.shape)
+
+
 def split_rhat(chain: np.ndarray) -> np.ndarray:
     """Split-chain potential scale reduction (Gelman et al., BDA3 Sec. 11.4) over independent
     chains.
@@ -185,7 +209,8 @@ def ensemble_rhat(chain: np.ndarray, n_ensembles: int) -> np.ndarray:
     Parameters
     ----------
     chain : array (steps, n_ensembles * walkers, P)
-        The walkers of ensemble k are the k-th contiguous block of the walker axis.
+        The walkers of ensemble k are the k-th contiguous block of the walker axis; finite and 3-D
+        (a ValueError otherwise).
     n_ensembles : int
 
     Returns
@@ -205,6 +230,7 @@ def ensemble_rhat(chain: np.ndarray, n_ensembles: int) -> np.ndarray:
         or n_ensembles < 1
     ):
         raise ValueError(f"n_ensembles must be an integer >= 1, got {n_ensembles!r}")
+    chain = _standardised(_check_chain(chain))
     S, WT, P = chain.shape
     if WT % n_ensembles:
         raise ValueError(
@@ -229,7 +255,9 @@ def effective_sample_size(chain: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     chain : array (steps, walkers, P)
-        Unthinned samples after burn-in; tau is emcee's integrated autocorrelation time
+        Unthinned samples after burn-in, finite and 3-D (a ValueError otherwise; standardised per
+        parameter first, so the result does not depend on units); tau is emcee's integrated
+        autocorrelation time
         (walker-averaged
         autocorrelation, automatic window; Goodman & Weare 2010, Sokal 1997).
 
@@ -239,14 +267,16 @@ def effective_sample_size(chain: np.ndarray) -> np.ndarray:
     """
     import emcee
 
+    chain = _check_chain(chain)
     S, W, P = chain.shape
     if S < 2:
         return np.full(P, np.nan)
+    moving = np.ptp(chain.reshape(-1, P), axis=0) > 0
+    chain = _standardised(chain)  # tau is scale-invariant; a chain of 1e160 overflowed to NaN
     with warnings.catch_warnings(), np.errstate(invalid="ignore", divide="ignore"):
         warnings.simplefilter("ignore")
         with np.errstate(invalid="ignore", divide="ignore"):  # a constant chain: tau NaN, flagged
             tau = emcee.autocorr.integrated_time(chain, tol=0)
-    moving = np.ptp(chain.reshape(-1, P), axis=0) > 0
     return np.where(moving & (tau > 0), S * W / np.maximum(tau, 1e-300), np.nan)
 
 
@@ -263,7 +293,8 @@ class PriorOptions:
         :data:`~scatterlab.inversion.DEFAULT_BOUNDS`).
     kappa_prior : "uniform" or "log-uniform"
     noise_bounds : (low, high)
-        Log-uniform prior range of the DOLP noise when it is a parameter.
+        Log-uniform prior range of the DOLP noise when it is a parameter, within the range of
+        ``noise`` (``1e-12 <= low < high <= 1``; below, the whitened residuals overflow).
     """
 
     bounds: dict | None = None
@@ -276,8 +307,18 @@ class PriorOptions:
                 f"kappa_prior must be 'uniform' or 'log-uniform', got {self.kappa_prior!r}"
             )
         nb = self.noise_bounds
-        if not (len(nb) == 2 and np.all(np.isfinite(nb)) and 0 < nb[0] < nb[1]):
-            raise ValueError(f"noise_bounds must satisfy 0 < low < high, got {nb!r}")
+        lo, hi = NOISE_RANGE
+        allowed = (
+            f"noise_bounds must be (low, high), two DOLP standard deviations with "
+            f"{lo:g} <= low < high <= {hi:g}"
+        )
+        try:
+            ok = not isinstance(nb, (str, bytes)) and np.shape(nb) == (2,)
+            pair = np.asarray(nb, float) if ok else None
+        except (TypeError, ValueError):
+            pair = None
+        if pair is None or not (np.all(np.isfinite(pair)) and lo <= pair[0] < pair[1] <= hi):
+            raise ValueError(f"{allowed}, got {nb!r}")
 
 
 MOVES = ("kde", "de", "stretch")
@@ -302,7 +343,7 @@ class SamplerOptions:
         %);
         "stretch".
     starts : sequence of (n, kappa) -- least-squares starts that locate the modes.
-    mode_delta_chi2 : float -- minima within this chi-square of the best seed walkers.
+    mode_delta_chi2 : float -- minima within this chi-square of the best seed walkers (finite, > 0).
     progress : bool -- emcee's progress bar.
     """
 
@@ -349,8 +390,7 @@ class SamplerOptions:
             raise ValueError(
                 f"moves must be one of {list(MOVES)} or emcee move objects, got {self.moves!r}"
             )
-        if not self.mode_delta_chi2 >= 0:
-            raise ValueError(f"mode_delta_chi2 must be >= 0, got {self.mode_delta_chi2!r}")
+        as_scalar(self.mode_delta_chi2, "mode_delta_chi2", 0.0, np.inf, open_lo=True)
         check_starts(self.starts)
 
 
@@ -606,11 +646,13 @@ def posterior_problem(
     sigma : float, optional
         Known roughness.
     systematic : float or array (M,), optional
-        Known systematic DOLP standard deviation per geometry.
+        Known systematic DOLP standard deviation per geometry, in ``[0, 1]``.
     covariance : array (M, M), optional
-        Full DOLP error covariance.
+        Full DOLP error covariance (as :func:`~scatterlab.inversion.least_squares.check_covariance`:
+        variances <= 1, eigenvalues >= 1e-24).
     correlated : array (M,), optional
-        One error shared by the whole series [DOLP]: adds :math:`c\,c^\mathsf{T}` to the covariance.
+        One error shared by the whole series [DOLP], finite with ``|c| <= 1``: adds
+        :math:`c\,c^\mathsf{T}` to the covariance.
     prior : PriorOptions, optional
     model_kw : dict, optional
         Keywords of :class:`scatterlab.pbrdf.Model`.
@@ -626,11 +668,20 @@ def posterior_problem(
     M = np.size(theta_i)
     noise, systematic, covariance = _check_error_model(noise, systematic, covariance, M)
     if correlated is not None:
-        correlated = np.asarray(correlated, float)
-        if correlated.shape != (M,) or not np.all(np.isfinite(correlated)):
+        try:
+            c = None if isinstance(correlated, (str, bytes)) else np.asarray(correlated, float)
+        except (TypeError, ValueError):
+            c = None
+        if (
+            c is None
+            or c.shape != (M,)
+            or not np.all(np.isfinite(c) & (np.abs(c) <= NOISE_RANGE[1]))
+        ):
             raise ValueError(
-                f"correlated must be an array ({M},) of finite DOLP errors, got {correlated!r}"
+                f"correlated must be an array ({M},) of DOLP errors with |c| <= "
+                f"{NOISE_RANGE[1]:g}, got {correlated!r}"
             )
+        correlated = c
     known = (
         [noise or 0.0]
         + ([] if systematic is None else [float(systematic.max())])
@@ -728,7 +779,7 @@ def local_minima(
     noise : float, optional
         Known DOLP noise standard deviation.
     delta_chi2 : float
-        Chi-square window above the best minimum.
+        Chi-square window above the best minimum: finite and > 0 (a ValueError otherwise).
     **model_kw
         ``shadowing``, ``diffuse``, ``distribution`` of :class:`scatterlab.pbrdf.Model`.
 
@@ -737,6 +788,7 @@ def local_minima(
     list of DolpFit
         The distinct minima, lowest cost first (empty when no start could be fitted).
     """
+    delta_chi2 = as_scalar(delta_chi2, "delta_chi2", 0.0, np.inf, open_lo=True)
     fits = [
         fit_dolp(
             dolp,
@@ -776,9 +828,14 @@ def local_minima(
 def _problem_minima(
     problem: PosteriorProblem, options: SamplerOptions, messages: list
 ) -> list[DolpFit]:
-    """The least-squares minima that seed the walkers; identifiability warnings become messages."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", IdentifiabilityWarning)
+    """The least-squares minima that seed the walkers, with one message per statement about them.
+
+    The least-squares column of the report is the best minimum; each message names the minimum it is
+    about (the fits of the other starts, and their warnings, are not reported).
+    """
+    with warnings.catch_warnings():
+        # every start's fit warns of its own end point; what matters is said below per kept minimum
+        warnings.simplefilter("ignore", IdentifiabilityWarning)
         minima = local_minima(
             problem.dolp,
             problem.theta_i,
@@ -787,29 +844,80 @@ def _problem_minima(
             sigma=problem.sigma,
             bounds=problem.prior.bounds,
             starts=options.starts,
-            noise=problem.error_sd(),
+            # the chi-square scale of the window; a known error above 1 (noise and systematic
+            # together) is clipped to the range a DOLP noise may take
+            noise=None if problem.error_sd() is None else min(problem.error_sd(), NOISE_RANGE[1]),
             delta_chi2=options.mode_delta_chi2,
             **problem.model_kw,
         )
-    # the warnings come from every start's fit; they describe the result only if a kept minimum has
-    # an undetermined direction (infinite error), and one copy of each says it
-    if any(not np.all(np.isfinite(f.errors)) for f in minima):
-        said = dict.fromkeys(
-            f"at a least-squares minimum that starts the sampler: {w.message} (the intervals are the "
-            "posterior's)"
-            for w in caught
-            if issubclass(w.category, IdentifiabilityWarning)
-        )
-        messages.extend(said)
+    messages.extend(_minima_messages(minima, problem, options.mode_delta_chi2))
+    return minima
+
+
+def _describe_minimum(f: DolpFit, k: int, count: int) -> str:
+    """``"the least-squares minimum n=..., kappa=..., sigma=... (the best: ...)"``."""
+    at = f"n={float(f.n):.4g}, kappa={float(f.kappa):.4g}, sigma={float(f.sigma):.4g}"
+    if count == 1:
+        return f"the least-squares minimum ({at}; the table's least-squares column)"
+    which = "the best, the table's least-squares column" if k == 0 else "not the table's"
+    return f"least-squares minimum {k + 1} of {count} ({at}; {which})"
+
+
+def _minima_messages(minima: list, problem: PosteriorProblem, delta_chi2: float) -> list[str]:
+    """What the data say about each least-squares minimum that starts the sampler: an undetermined
+    parameter (singular information, infinite Laplace error), a value within one Laplace error of a
+    bound of the prior (the Laplace error is then no interval), a value on a bound of the box."""
+    out = []
+    lo, hi = problem.lo, problem.hi
     if len(minima) > 1:
-        messages.append(
-            f"{len(minima)} least-squares minima within delta chi2 = {options.mode_delta_chi2}: "
+        out.append(
+            f"{len(minima)} least-squares minima within delta chi2 = {delta_chi2:g} start the "
+            "sampler's walkers: "
             + "; ".join(
                 f"n={float(f.n):.4g}, kappa={float(f.kappa):.4g}, sigma={float(f.sigma):.4g}"
                 for f in minima
             )
+            + " (best first; whether the posterior has one mode or more is in the diagnostics)"
         )
-    return minima
+    for k, f in enumerate(minima):
+        x = np.array([float(f.n), float(f.kappa), float(f.sigma)])[: problem.P]
+        err = np.asarray(f.errors, float)[: problem.P]
+        names = PARAMETERS[: problem.P]
+        who = _describe_minimum(f, k, len(minima))
+        undetermined = [nm for j, nm in enumerate(names) if not np.isfinite(err[j])]
+        if undetermined:
+            why = (
+                "; kappa is on its bound 0, where the DOLP is stationary in kappa"
+                if "kappa" in undetermined and x[1] <= lo[1]
+                else ""
+            )
+            out.append(
+                f"at {who} the data do not determine {', '.join(undetermined)} (singular Fisher "
+                f"information{why}): its Laplace error is inf; the intervals are the posterior's"
+            )
+        near = [
+            (nm, x[j], err[j], lo[j] if x[j] - err[j] <= lo[j] else hi[j])
+            for j, nm in enumerate(names)
+            if np.isfinite(err[j]) and (x[j] - err[j] <= lo[j] or x[j] + err[j] >= hi[j])
+        ]
+        on = [(nm, b) for nm, v, e, b in near if abs(v - b) <= 1e-9 * (hi - lo)[names.index(nm)]]
+        close = [(nm, v, e, b) for nm, v, e, b in near if (nm, b) not in on]
+        if on:
+            out.append(
+                f"at {who} {' and '.join(f'{nm} ends on its prior bound {b:g}' for nm, b in on)}: "
+                "the value there is the bound, not an estimate, and its Laplace error ignores the bound"
+            )
+        if close:
+            out.append(
+                f"at {who} "
+                + " and ".join(f"{nm} = {v:.4g} +/- {e:.2g}" for nm, v, e, _ in close)
+                + " (Laplace) lie within one error of the prior bound "
+                + " and ".join(f"{nm} = {b:g}" for nm, _, _, b in close)
+                + ": the data do not distinguish them from the bound (the information is small, not "
+                "singular), and the Laplace error, which ignores the bound, is no interval; the "
+                "posterior's interval is cut by the prior there"
+            )
+    return out
 
 
 def start_walkers(
@@ -1123,6 +1231,12 @@ def diagnose(
         if problem.sigma is not None:
             m["median"] = np.r_[m["median"], problem.sigma]
         m["median"] = np.asarray(m["median"], float)
+    if len(minima) > 1 and len(modes) == 1:
+        messages.append(
+            f"the posterior has one mode: the walkers started at the {len(minima)} least-squares "
+            "minima above mixed into one cluster (the minima are dips within one posterior mode, "
+            "not separate modes)"
+        )
     if len(modes) > 1:
         messages.append(
             "multimodal posterior: "
@@ -1710,12 +1824,15 @@ def sample_posterior(
     sigma : float, optional
         Known roughness (then only n and kappa are sampled).
     systematic : float or array (M,), optional
-        Known systematic DOLP error standard deviation per geometry, added in quadrature.
+        Known systematic DOLP error standard deviation per geometry, added in quadrature; in
+        ``[0, 1]``.
     covariance : array (M, M), optional
-        Full DOLP error covariance (correlated errors across geometries), used instead of ``noise``.
+        Full DOLP error covariance (correlated errors across geometries), used instead of ``noise``:
+        symmetric positive definite, variances <= 1 and eigenvalues >= 1e-24 (standard deviations
+        in the range of ``noise``).
     correlated : array (M,), optional
         One error shared by the whole series [DOLP] (a correction's scale error), with any of the
-        above: adds :math:`c\,c^\mathsf{T}` to the error covariance.
+        above: adds :math:`c\,c^\mathsf{T}` to the error covariance. Finite, ``|c| <= 1``.
     prior : PriorOptions, optional
         Or the keywords ``bounds``, ``kappa_prior``, ``noise_bounds``.
     sampler : SamplerOptions, optional

@@ -17,10 +17,10 @@ from pathlib import Path
 import numpy as np
 
 from scatterlab._checks import as_rng
-from scatterlab.inversion.posterior import FIT_P_MIN, PARAMETERS, Posterior
+from scatterlab.inversion.posterior import FIT_P_MIN, KAPPA_FLOOR, PARAMETERS, Posterior
 from scatterlab.runtime.results import atomic_write_bytes, write_text
 
-__all__ = ["posterior_report", "report_index", "summary_table"]
+__all__ = ["posterior_report", "report_index", "summary_table", "prior_line"]
 
 LABELS = {"n": "n", "kappa": r"$\kappa$", "sigma": r"$\sigma$"}
 
@@ -221,18 +221,61 @@ def _markdown(post, name, truth, title=None, notes=()) -> str:
         ]
     if post.messages:
         lines += ["**Warnings:**", ""] + [f"- {m}" for m in post.messages] + [""]
+    lines += [prior_line(post), ""]  # the ranges the intervals of the table are drawn within
     lines += [
         f"Diagnostics: {d['n_steps']} steps x {d['walkers']} walkers, burn-in {d['burn']}, "
         f"thin {d['thin']}; tau = {np.round(d['tau'], 1).tolist()} "
         f"(run = {d['steps_over_tau']:.0f} tau); acceptance {d['acceptance']:.2f}; "
         f"R-hat between {d['n_ensembles']} ensembles "
         f"{np.round(d['rhat'], 3).tolist()}; effective samples {ess}; {state}; "
-        f"{'**multimodal**' if d['multimodal'] else 'one mode'}; {d['seconds']:.1f} s.",
+        f"{_modes_text(post, d)}; {d['seconds']:.1f} s.",
         "",
     ]
     for kind in ("corner", "trace", "predictive"):
         lines += [f"![{kind}]({name}_{kind}.png)", ""]
     return "\n".join(lines)
+
+
+def _modes_text(post, d) -> str:
+    """The posterior's modes, and the least-squares minima beside them when there are several."""
+    text = "**multimodal** posterior" if d["multimodal"] else "one posterior mode"
+    k = len(post.least_squares)
+    return text + (f" (from {k} least-squares minima, see the warnings)" if k > 1 else "")
+
+
+def prior_line(post: Posterior) -> str:
+    """The priors of the posterior in one sentence: each parameter's range and shape, and the noise's.
+
+    Parameters
+    ----------
+    post : Posterior
+
+    Returns
+    -------
+    str
+        E.g. ``"Priors: n uniform on [0, 5]; kappa uniform on [0, 25]; sigma uniform on [0.01, 1.5];
+        DOLP noise known."``
+    """
+    parts = []
+    for name in PARAMETERS:
+        lo, hi = post.bounds[name]
+        if name == "sigma" and post.sigma_known is not None:
+            parts.append(f"sigma known ({post.sigma_known:g}, not sampled)")
+        elif name == "kappa" and post.kappa_prior == "log-uniform":
+            parts.append(f"kappa log-uniform on [{max(lo, KAPPA_FLOOR):g}, {hi:g}]")
+        else:
+            parts.append(f"{name} uniform on [{lo:g}, {hi:g}]")
+    if post.noise_bounds is not None:
+        parts.append(
+            f"DOLP noise log-uniform on [{post.noise_bounds[0]:g}, {post.noise_bounds[1]:g}]"
+        )
+    else:
+        parts.append("DOLP error known (not sampled)")
+    return (
+        "Priors: "
+        + "; ".join(parts)
+        + ". Where the data constrain a parameter little its interval follows this prior."
+    )
 
 
 def report_index(

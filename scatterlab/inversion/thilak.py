@@ -85,12 +85,25 @@ def _check_options(solver, bounds, tol, max_nfev):
     if solver not in SOLVERS:
         raise ValueError(f"solver must be one of {SOLVERS}, got {solver!r}")
     if bounds is not None:
-        lo, hi = np.asarray(bounds, float).T
-        if solver != "trf" or lo.shape != (2,) or np.any(lo < 0) or np.any(hi <= lo):
-            raise ValueError(
-                "bounds must be ((n_lo, n_hi), (kappa_lo, kappa_hi)) with 0 <= lo < hi, "
-                "and need solver='trf'"
-            )
+        allowed = (
+            "bounds must be ((n_lo, n_hi), (kappa_lo, kappa_hi)), two pairs with 0 <= lo < hi "
+            "(lo finite, hi may be inf), "
+            f"and need solver='trf'; got {bounds!r}"
+        )
+        try:
+            b = None if isinstance(bounds, (str, bytes)) else np.asarray(bounds, float)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(allowed) from exc
+        if (
+            b is None
+            or b.shape != (2, 2)
+            or not np.all(np.isfinite(b[:, 0]))
+            or np.any(np.isnan(b))
+        ):
+            raise ValueError(allowed)
+        lo, hi = b.T
+        if solver != "trf" or np.any(lo < 0) or np.any(hi <= lo):
+            raise ValueError(allowed)
         bounds = (lo, hi)
     if tol is not None and not 0 < tol < 1:
         raise ValueError(f"tol must be in (0, 1), got {tol}")
@@ -161,7 +174,8 @@ def thilak_two_step(
         Nelder-Mead on the sum of squares (MATLAB's ``fminsearch``).
     bounds : ((n_lo, n_hi), (kappa_lo, kappa_hi)) or None
         Box of step 1 (step 2 is then bounded to theta_r in [0, 90] deg); a bounded solution is
-        physical by construction, so it never restarts.
+        physical by construction, so it never restarts. Exactly two pairs with ``0 <= lo < hi``
+        (``lo`` finite), only with ``solver="trf"``; anything else is a ValueError.
     tol : float or None
         Stopping tolerance on the relative change of the cost and of the parameters and on
         the gradient (``ftol``, ``xtol``, ``gtol``; for Nelder-Mead the absolute ``xatol`` and
@@ -277,7 +291,7 @@ def thilak_crlb(n, kappa, theta_r, theta_i, noise, *, theta_r_known: bool = Fals
     theta_i : array (M,) [rad]
     noise : float
         DOP noise standard deviation (> 0). ``n``, ``kappa``, ``theta_r`` and ``noise`` are
-        scalars (an array is a ValueError): call once per truth.
+        real scalars (an array or a string is a ValueError): call once per truth.
     theta_r_known : bool
 
     Returns
@@ -290,6 +304,13 @@ def thilak_crlb(n, kappa, theta_r, theta_i, noise, *, theta_r_known: bool = Fals
             raise ValueError(
                 f"{name} must be a single float (one truth per call), got shape {np.shape(value)}"
             )
+        if isinstance(value, (str, bytes)):
+            raise ValueError(f"{name} must be a single float (one truth per call), got {value!r}")
+        try:
+            float(value)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{name} must be a single float, got {value!r}") from exc
+    n, kappa, theta_r, noise = (float(v) for v in (n, kappa, theta_r, noise))
     if not (np.isfinite(noise) and noise > 0):
         raise ValueError(f"noise must be a positive DOP standard deviation, got {noise}")
     if not (np.isfinite(n) and np.isfinite(kappa) and n > 0 and kappa >= 0):
