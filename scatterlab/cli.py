@@ -412,7 +412,7 @@ def _fit_dolp(args) -> int:
     import numpy as np
 
     from scatterlab.inversion import ConvergenceWarning, MisfitWarning, sample_posterior
-    from scatterlab.inversion.report import posterior_report
+    from scatterlab.inversion.report import posterior_report, prior_line
     from scatterlab.io.dolp_table import UNUSED_NOTE, read_dolp_table
 
     try:
@@ -508,6 +508,7 @@ def _fit_dolp(args) -> int:
     )
     for line in fit_lines:
         print(line)
+    print(prior_line(post))
     if not post.converged:  # the lines above say why; say how in the command line's words
         reason = post.convergence_reason
         rows, free = data.dolp.size, len(names) + (noise is None and cov is None)
@@ -958,7 +959,10 @@ def main(argv=None) -> int:
         "dataset's full_well_e)",
     )
     an.add_argument(
-        "--sigma", type=float, default=0.3, help="known roughness (rms facet slope, default 0.3)"
+        "--sigma",
+        type=float,
+        default=None,
+        help="known roughness (rms facet slope); without it 0.3 is assumed, and the report says so",
     )
     an.add_argument(
         "--posterior-steps", type=int, default=1500, help="MCMC chain length (default 1500)"

@@ -544,3 +544,29 @@ def test_every_seed_and_integer_option_is_named_in_its_error(tmp_path, capsys):
     with pytest.raises(SystemExit):  # not an integer: argparse names the option
         main(["fit-dolp", path, "--seed", "x"])
     assert "argument --seed: invalid int value" in capsys.readouterr().err
+
+
+def test_fit_dolp_of_glass_states_the_priors_and_says_one_thing_about_kappa(tmp_path, capsys):
+    """A new user's glass table (n 1.5, kappa 0, sigma 0.2; columns aoi, DOP, std_dolp): the report
+    and the screen state the prior ranges, and each statement about kappa names the least-squares
+    minimum it is about, so an infinite variance is never said beside the table's finite one."""
+    import numpy as np
+
+    from scatterlab.inversion import model_dolp
+
+    deg = np.linspace(20, 70, 8)
+    t = np.radians(deg)
+    y = model_dolp(1.5, 0.0, 0.2, t, t) + 0.005 * np.random.default_rng(4).standard_normal(8)
+    path = _dolp_table(tmp_path / "glass.csv", "aoi,DOP,std_dolp", np.c_[deg, y, np.full(8, 0.005)])
+    argv = ["fit-dolp", path, "--out", str(tmp_path / "o"), "--posterior-steps", "200"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    priors = "Priors: n uniform on [0, 5]; kappa uniform on [0, 25]; sigma uniform on [0.01, 1.5]"
+    report = (tmp_path / "o" / "report.md").read_text()
+    assert priors in out and priors in report
+    for text in (out, report):
+        inf = [line for line in text.splitlines() if "Laplace error is inf" in line]
+        assert inf and all("not the table's" in line for line in inf)
+        near = [line for line in text.splitlines() if "within one error of the prior bound" in line]
+        assert len(near) == 1 and "kappa = 0.06779 +/- 0.97" in near[0] and "1 of 2" in near[0]
+    assert "one posterior mode (from 2 least-squares minima" in report or "**multimodal**" in report

@@ -49,7 +49,11 @@ from scatterlab.characterization.pipeline import interior, log_stage, restore_ta
 from scatterlab.characterization.registration import register_restoration
 from scatterlab.characterization.restoration import RestoreSettings
 
-__all__ = ["AnalyzeSettings", "analyze"]
+__all__ = ["AnalyzeSettings", "analyze", "DEFAULT_SIGMA"]
+
+# the roughness (rms facet slope) assumed when none is given: the bundled examples' (measured data need
+# their own, which the DOLP at specular geometries does not determine)
+DEFAULT_SIGMA = 0.3
 
 
 @dataclass(frozen=True)
@@ -80,8 +84,10 @@ class AnalyzeSettings:
         without), so the adaptive classes are not unmixed. A restoration that leaves the
         dielectric's DOLP well below its true value (a blind one through strong turbulence) puts
         much of the paint beyond the fixed priors' threshold; the adaptive classes follow the data.
-    sigma : float
-        Known roughness (per-axis rms facet slope) used by the inversion.
+    sigma : float or None
+        Known roughness (per-axis rms facet slope) used by the inversion; None (default): the
+        default :data:`DEFAULT_SIGMA` is assumed, and the report says so (the data do not measure
+        it). :attr:`roughness` is the value used.
     bias_samples : int
         Re-simulations of the blind restoration for the self-calibration
         (:mod:`~scatterlab.characterization.self_calibration`): their mean bias is subtracted, their
@@ -125,7 +131,7 @@ class AnalyzeSettings:
     psf_model: str = "pupil"
     priors: str = "ch7"
     classes: str = "adaptive"
-    sigma: float = 0.3
+    sigma: float | None = None
     bias_samples: int = 3
     posterior_steps: int = 1500
     model_error: bool = False
@@ -133,6 +139,11 @@ class AnalyzeSettings:
     frames: int = 1
     psf_refine: str = "none"
     blind_starts: int = 3
+
+    @property
+    def roughness(self) -> float:
+        """The rms facet slope the inversion uses: ``sigma``, or :data:`DEFAULT_SIGMA` when it is None."""
+        return DEFAULT_SIGMA if self.sigma is None else float(self.sigma)
 
     def validate(self) -> "AnalyzeSettings":
         """Check every option.
@@ -163,7 +174,7 @@ class AnalyzeSettings:
             raise ValueError(f"blind_starts must be in [1, 64], got {self.blind_starts}")
         if not 1 <= self.bias_samples <= 20:
             raise ValueError(f"bias_samples must be in [1, 20], got {self.bias_samples}")
-        if not 1e-3 <= self.sigma <= 1.5:
+        if self.sigma is not None and not 1e-3 <= self.sigma <= 1.5:
             raise ValueError(f"sigma must be in [0.001, 1.5], got {self.sigma}")
         if not isinstance(self.model_error, bool):
             raise ValueError(f"model_error must be True or False, got {self.model_error!r}")
@@ -235,7 +246,7 @@ def _config(ds, settings):
         psf_refine=settings.psf_refine,
         blind_starts=settings.blind_starts,
         priors=settings.priors,
-        sigma_known=settings.sigma,
+        sigma_known=settings.roughness,
         posterior_steps=settings.posterior_steps,
         seed=settings.seed,
         wavelength_um=ds.wavelength * 1e6,
@@ -297,12 +308,45 @@ def analyze(
     t0 = time.perf_counter()
     rng = np.random.default_rng(settings.seed)
     acqs = _acquisitions(ds, settings)
-    rests, images = _restore_and_register(acqs, ds.theta, settings, folder, rng, executor)
-    layout = _layout(images, ds.theta, settings)
+    said = []  # (stage, message) of the warnings the stages gave, each once: in the report
+    with _warnings_into(said, "restoration"):
+        rests, images = _restore_and_register(acqs, ds.theta, settings, folder, rng, executor)
+        layout = _layout(images, ds.theta, settings)
     log_stage("invert: per-pixel maps, self-calibration, region posteriors")
-    estimates, maps, missing = _invert(ds, settings, rests, acqs, images, layout, rng, executor)
+    with _warnings_into(said, "inversion"):
+        estimates, maps, missing = _invert(ds, settings, rests, acqs, images, layout, rng, executor)
     seconds = time.perf_counter() - t0
-    return _write(folder, ds, settings, images, layout, maps, estimates, seconds, missing)
+    return _write(folder, ds, settings, images, layout, maps, estimates, seconds, missing, said)
+
+
+class _warnings_into:
+    """Collect the ``UserWarning`` s a stage gives into ``said`` as ``(stage, message)``, each message
+    once (a fit repeated per re-simulation gives the same warning each time), and show each once on
+    stderr: the report prints them beside its numbers. Other warnings pass through unchanged."""
+
+    def __init__(self, said: list, stage: str):
+        self.said, self.stage = said, stage
+        self._catch = warnings.catch_warnings(record=True)
+
+    def __enter__(self):
+        self._caught = self._catch.__enter__()
+        warnings.simplefilter("always", UserWarning)
+        return self
+
+    def __exit__(self, *exc):
+        self._catch.__exit__(*exc)
+        known = {m for _, m in self.said}
+        for w in self._caught:
+            message = str(w.message)
+            if not issubclass(w.category, UserWarning):
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+            elif message not in known:
+                known.add(message)
+                self.said.append((self.stage, message))
+                warnings.warn_explicit(
+                    f"{message} (in report.md)", w.category, w.filename, w.lineno
+                )
+        return False
 
 
 def _mid(thetas) -> int:
@@ -426,7 +470,7 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
     estimates = region_posteriors(
         regions,
         thetas,
-        settings.sigma,
+        settings.roughness,
         rng,
         n_steps=settings.posterior_steps,
         executor=executor,
@@ -436,7 +480,7 @@ def _invert(ds, settings, rests, acqs, images, layout, rng, executor):
         warning = _unmeasured_border(e.name, layout, stack, thetas, sel, margin)
         if warning:
             e.warnings.append(warning)
-    return estimates, pixel_maps(stack, thetas, settings.sigma), missing
+    return estimates, pixel_maps(stack, thetas, settings.roughness), missing
 
 
 def _unmeasured_pixels(ds) -> bool:
@@ -531,9 +575,12 @@ def _truths(ds) -> dict:
     }
 
 
-def _write(folder, ds, settings, images, layout, maps, estimates, seconds, missing) -> Path:
+def _write(
+    folder, ds, settings, images, layout, maps, estimates, seconds, missing, said=()
+) -> Path:
     import h5py
 
+    from scatterlab.characterization.metrics import at_fit_bound
     from scatterlab.characterization.report import save_png, versions
     from scatterlab.runtime.results import write_json, write_text
 
@@ -580,13 +627,19 @@ def _write(folder, ds, settings, images, layout, maps, estimates, seconds, missi
         "unclassified_pixels": int(np.sum(layout < 0)),
         "data_notes": list(ds.notes),
         "regions_left_out": missing,
+        "sigma": {"value": settings.roughness, "assumed": settings.sigma is None},
+        "warnings": [{"stage": stage, "message": m} for stage, m in said],
+        "pixels_at_fit_bound": int(np.sum(at_fit_bound(maps.n, maps.kappa))),
     }
     scored = _classification_vs_labels(ds, layout)
     if scored is not None:
         summary["classification_vs_labels"] = scored
     write_json(folder.path / "summary.json", summary, overwrite=True)
     _maps_figure(folder.path, images, layout, maps, ds, save_png)
-    text = _markdown(ds, settings, posts, seconds, missing, scored, int(np.sum(layout < 0)))
+    text = _markdown(
+        ds, settings, posts, seconds, missing, scored, int(np.sum(layout < 0)), list(said)
+    )
+    text = text.replace("![maps](maps.png)", _maps_caption(maps) + "\n\n![maps](maps.png)")
     report = write_text(folder.report, text, overwrite=True)
     import shutil
 
@@ -598,6 +651,8 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
+    from scatterlab.characterization.metrics import at_fit_bound
+    from scatterlab.characterization.report import AT_BOUND_COLOUR
     from scatterlab.plotting import headless_pyplot
 
     plt = headless_pyplot()
@@ -642,6 +697,23 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
             im = ax.imshow(
                 img, cmap=cmap, vmin=lim[0] if lim else None, vmax=lim[1] if lim else None
             )
+            if title in ("n", "kappa"):
+                # a fit that stopped on its box's edge is the bound, not an estimate: its own colour,
+                # as in characterize's figure (report.AT_BOUND_COLOUR, metrics.at_fit_bound)
+                on = at_fit_bound(maps.n, maps.kappa) & np.isfinite(img)
+                ax.imshow(
+                    np.ma.masked_array(np.ones(on.shape), ~on),
+                    cmap=ListedColormap([AT_BOUND_COLOUR]),
+                    vmin=0,
+                    vmax=1,
+                    interpolation="nearest",
+                )
+                if on.any() and title == "kappa":
+                    ax.legend(
+                        handles=[Patch(color=AT_BOUND_COLOUR, label="fit on its box's edge")],
+                        fontsize=7,
+                        loc="lower right",
+                    )
             # S0 of the restoration is in photo-electrons per pixel (both polarizations)
             unit = {"sqrt(S0)": "sqrt(S0) [sqrt(e-)]"}.get(title, title)
             fig.colorbar(im, ax=ax, shrink=0.8, label=unit)
@@ -658,7 +730,40 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
     save_png(fig, Path(path) / "maps.png")
 
 
-def _markdown(ds, settings, posts, seconds, missing, scored=None, unclassified=0) -> str:
+def _maps_caption(maps) -> str:
+    """The figure's caption: what the per-pixel maps are, and how many pixels' fits stopped on the box's
+    edge (cyan in the figure)."""
+    from scatterlab.characterization.metrics import at_fit_bound
+    from scatterlab.inversion.least_squares import DEFAULT_BOUNDS
+
+    fitted = int(np.sum(np.isfinite(maps.n) & np.isfinite(maps.kappa)))
+    on = int(np.sum(at_fit_bound(maps.n, maps.kappa)))
+    box = ", ".join(
+        f"{p} {DEFAULT_BOUNDS[p][0]:g}-{DEFAULT_BOUNDS[p][1]:g}" for p in ("n", "kappa")
+    )
+    text = (
+        "Per-pixel n and kappa (`maps.png`): a least-squares fit of each pixel's DOLP over the geometries "
+        f"within the box {box}"
+    )
+    if on:
+        text += (
+            f"; {on} of {fitted} fitted pixels stopped on the box's edge (cyan): the bound, not an "
+            "estimate"
+        )
+    return text + "."
+
+
+def _sigma_text(settings) -> str:
+    """How the report states the roughness: given, or the default assumed (and how to change it)."""
+    if settings.sigma is not None:
+        return f"sigma {settings.roughness:g} (given)"
+    return (
+        f"sigma {settings.roughness:g} (assumed: the default, not measured; give the surface's own "
+        "with --sigma S, AnalyzeSettings(sigma=S))"
+    )
+
+
+def _markdown(ds, settings, posts, seconds, missing, scored=None, unclassified=0, said=()) -> str:
     lines = [
         f"# Analysis: {ds.title or 'polarimetric dataset'}",
         "",
@@ -672,7 +777,7 @@ def _markdown(ds, settings, posts, seconds, missing, scored=None, unclassified=0
             else ""
         )
         + "; "
-        f"priors {settings.priors}; sigma {settings.sigma} (known). Run time {seconds:.0f} s."
+        f"priors {settings.priors}; {_sigma_text(settings)}. Run time {seconds:.0f} s."
         + (
             (
                 " **Simulated data: the truth is shown beside every estimate.**"
@@ -682,8 +787,7 @@ def _markdown(ds, settings, posts, seconds, missing, scored=None, unclassified=0
             if ds.simulated
             else ""
         ),
-        "",
-        f"{ds.description}",
+        *(["", ds.description] if ds.description.strip() else []),
         "",
         "Posterior of n and kappa from each region's mean DOLP over the geometries (regions from the "
         + (
@@ -717,6 +821,7 @@ def _markdown(ds, settings, posts, seconds, missing, scored=None, unclassified=0
             row += " - | - |"
         lines.append(row)
         notes += [f"- **{region}:** {w}" for w in p["warnings"]]
+    notes += [f"- **Warning ({stage}):** {m}" for stage, m in said]
     notes += [f"- **Region left out**, {m}" for m in missing]
     notes += [f"- **Data:** {n}." for n in ds.notes]
     if unclassified:

@@ -3,9 +3,15 @@ r"""Polarimetric image datasets: channel images of one scene at several specular
 :class:`PolarimetricDataset` is what ``scatterlab analyze`` and the characterization pipeline take
 from measured (or simulated) data:
 
-* ``counts`` (G, K, H, W) [e-]: channel images of G geometries and K polarizer channels, in
-  dark-subtracted photo-electrons (divide ADU by the gain first; small negative values from read
-  noise are fine);
+* ``counts`` (G, K, H, W) [e-]: channel images of G geometries and K polarizer channels, H, W >= 8,
+  in dark-subtracted photo-electrons (divide ADU by the gain first). Small negative values from read
+  noise are fine; strongly negative ones are refused: more pixels of a channel image below -5 sigma
+  than Gaussian noise leaves there (its expectation, under one pixel for sensors below 3.5 Mpx,
+  rounded up) plus 4 (hot pixels of the dark frame), where sigma = sqrt(2) x ``read_noise_e`` (the
+  read noise of the exposure and of a dark frame subtracted from it) or, without ``read_noise_e``,
+  the robust scatter of neighbouring pixels, which shot noise raises (a looser check: give the read
+  noise). Pixels in ``bad_pixels`` are not counted. Nor may a geometry's negative counts add up to
+  more than 10 % of its light;
 * ``polarizer_angles`` (K,) [rad]: analyser angle of each channel from the s axis;
 * ``theta`` (G,) [rad]: specular geometry of each acquisition, theta_i = theta_r and phi = pi
   (observation in the specular plane);
@@ -61,6 +67,7 @@ from pathlib import Path
 import numpy as np
 
 from scatterlab.io.dofp import check_pattern, demosaic, mosaic
+from scatterlab.io.table import LENGTH_UNITS, likely_wavelength_unit, wavelength_range_problem
 
 __all__ = [
     "Optics",
@@ -80,6 +87,15 @@ FORMAT_VERSION = 1
 DATASET_SUFFIXES = (".h5", ".hdf5", ".npz", ".tif", ".tiff", ".toml")
 # the largest share of a geometry's light its negative counts may carry (read noise, not signal)
 NEGATIVE_SHARE = 0.1
+# the smallest image (H, W) a dataset may have: the restoration's pupil grid is half the image, and a
+# PSF needs at least 4 samples across it
+MIN_IMAGE_SIZE = 8
+# a dark-subtracted count more than this many noise sigmas below 0 is not read noise (Gaussian read
+# noise puts one pixel in 3.5 million there) ...
+NEGATIVE_SIGMAS = 5.0
+# ... and a channel image may have this many such pixels beyond the Gaussian expectation (hot pixels
+# of a subtracted dark frame, a cosmic ray in it); more are refused (_strongly_negative)
+NEGATIVE_OUTLIERS = 4
 # the smallest share of a geometry's pixels that bad_pixels may leave to measure
 MIN_VALID_SHARE = 0.1
 LEFT_OUT_NOTE = "pixels left out of the likelihood per geometry"
@@ -331,11 +347,23 @@ def _scalar(flat, key, where, required=True):
     return v
 
 
-def _checked_counts(counts, where):
-    """Not empty, and light at every geometry."""
+def _checked_counts(counts, where, raw=False):
+    """Not empty, images of at least :data:`MIN_IMAGE_SIZE` pixels a side, and light at every
+    geometry (``raw``: demosaiced from DoFP raw frames, named so)."""
     if counts.size == 0:
         raise ValueError(
             f"{where}: 'counts' is empty: shape (G, K, H, W) = {counts.shape}, each must be >= 1"
+        )
+    H, W = counts.shape[-2:]
+    if min(H, W) < MIN_IMAGE_SIZE:
+        what = (
+            f"'raw' frames {2 * H} x {2 * W} demosaic into {H} x {W} channel images"
+            if raw
+            else f"'counts' images are {H} x {W} pixels (H x W)"
+        )
+        raise ValueError(
+            f"{where}: {what}; a dataset needs H, W >= {MIN_IMAGE_SIZE} (the restoration's pupil grid "
+            "is half the image, and a PSF needs at least 4 samples across it)"
         )
     G = counts.shape[0]
     dark = [g for g in range(G) if not np.any(counts[g] > 0)]
@@ -376,7 +404,7 @@ def _channels(flat, where):
             where=where,
         )
         return (
-            _checked_counts(counts, where),
+            _checked_counts(counts, where, raw=True),
             angles,
             [f"DoFP raw frames {raw.shape[1:]} demosaiced by superpixel into 4 channels"],
         )
@@ -399,6 +427,65 @@ def _channels(flat, where):
             "channels cannot tell S1 from S2 (radians given as degrees?)"
         )
     return counts, np.radians(deg), []
+
+
+def _noise_sigma(counts, read_noise):
+    """``(sigma (G, K) [e-], how)``: the noise of a dark-subtracted count at 0 e-.
+
+    With the read noise known: sqrt(2) x it, the read noise of the exposure and of a dark frame
+    subtracted from it (the worst case, a single dark frame). Without: the robust scatter of
+    horizontally neighbouring pixels of each image (median absolute deviation of their differences /
+    sqrt(2)), which shot noise in bright parts can only raise; at least 1 e- (noise-free simulations).
+    """
+    if read_noise is not None:
+        sigma = max(np.sqrt(2.0) * read_noise, 1.0)
+        how = (
+            f"sigma = sqrt(2) x read_noise_e {read_noise:g} e- = {sigma:.3g} e-: the read noise of "
+            "the exposure and of the dark frame subtracted"
+        )
+        return np.full(counts.shape[:2], sigma), how
+    d = np.diff(counts, axis=-1).reshape(counts.shape[:2] + (-1,))
+    mad = np.median(np.abs(d - np.median(d, axis=-1, keepdims=True)), axis=-1)
+    sigma = np.maximum(1.4826 * mad / np.sqrt(2.0), 1.0)
+    return sigma, "read_noise_e not given: sigma from the scatter of neighbouring pixels"
+
+
+def _strongly_negative(counts, read_noise, valid, where) -> None:
+    """Refuse a channel image with more pixels below -:data:`NEGATIVE_SIGMAS` noise sigmas than read
+    noise explains (its Gaussian expectation, rounded up, plus :data:`NEGATIVE_OUTLIERS`), pixels listed
+    in ``bad_pixels`` (``valid`` False) aside.
+
+    Slightly negative dark-subtracted counts are read noise; a patch far below it is a wrong dark or
+    bias frame, or defective pixels, which the restoration would take for a dark, unpolarized object
+    (the light-weighted share check of :func:`_checked_counts` misses a small patch in a bright image).
+    """
+    from math import ceil
+
+    from scipy.stats import norm
+
+    G, K, H, W = counts.shape
+    sigma, how = _noise_sigma(counts, read_noise)
+    limit = -NEGATIVE_SIGMAS * sigma  # (G, K)
+    below = counts < limit[..., None, None]
+    if valid is not None:
+        below &= valid[:, None]
+    found = below.sum(axis=(-2, -1))
+    allowed = NEGATIVE_OUTLIERS + ceil(norm.sf(NEGATIVE_SIGMAS) * H * W)
+    if not np.any(found > allowed):
+        return
+    g, k = (int(v) for v in np.unravel_index(np.argmax(found), found.shape))
+    lowest = np.where(below[g, k], counts[g, k], np.inf)
+    r, c = (int(v) for v in np.unravel_index(np.argmin(lowest), lowest.shape))
+    images = int(np.sum(found > allowed))
+    raise ValueError(
+        f"{where}: 'counts' at geometry {g}, channel {k}: {int(found[g, k])} of {H * W} pixels are "
+        f"below {limit[g, k]:.4g} e-, {NEGATIVE_SIGMAS:g} noise sigmas below 0 ({how}); the lowest "
+        f"{counts[g, k, r, c]:.6g} e- at row {r}, column {c}"
+        + (f"; {images} of {G * K} channel images have such pixels" if images > 1 else "")
+        + f". Noise leaves at most {allowed} per image there: was too much dark or bias subtracted "
+        "there, or are these pixels defective? List defective pixels in 'bad_pixels' (analyze "
+        "--bad-pixels MASK); give read_noise_e if it is missing or wrong"
+    )
 
 
 def _truth(flat, counts_shape, where):
@@ -553,8 +640,10 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
     Raises
     ------
     ValueError
-        A missing key, a wrong shape, NaN, angles or wavelength out of range, too few polarizer
-        orientations, bad optics or truth, naming ``where`` and the key.
+        A missing key, a wrong shape, NaN, images smaller than 8 x 8, strongly negative counts (module
+        docstring), angles or wavelength out of range (the wavelength in [0.01, 100] um,
+        :func:`scatterlab.io.table.wavelength_range_problem`), too few polarizer orientations, bad
+        optics or truth, naming ``where`` and the key.
     """
     _check_keys(flat, where)
     counts, angles, notes = _channels(flat, where)
@@ -570,9 +659,16 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
             "the DOLP is below 1e-3 and determines nothing: radians given as degrees?"
         )
     wavelength = _scalar(flat, "wavelength_um", where) * 1e-6
-    if not 0.01 <= wavelength * 1e6 <= 100:
+    problem = wavelength_range_problem(wavelength * 1e6, "um")
+    if problem:
+        likely = likely_wavelength_unit(wavelength * 1e6, "um")
         raise ValueError(
-            f"{where}: 'wavelength_um' = {wavelength * 1e6:g} is outside [0.01, 100] um"
+            f"{where}: 'wavelength_um' = {wavelength * 1e6:g}: {problem}"
+            + (
+                f"; 'wavelength_um' is in micrometres: write {wavelength * 1e6 * LENGTH_UNITS[likely] / 1e-6:g}"
+                if likely
+                else ""
+            )
         )
     kw = {
         k.replace("_mm", "").replace("_um", ""): None if v is None else v * _OPTICS_KEYS[k]
@@ -591,6 +687,7 @@ def from_flat(flat: dict, where: str) -> PolarimetricDataset:
         raise ValueError(f"{where}: 'read_noise_e' must be >= 0, got {read_noise}")
     bad = _bad_pixels(flat, counts.shape, where)
     valid = _valid(bad)
+    _strongly_negative(counts, None if read_noise is None else float(read_noise), valid, where)
     full_well = _scalar(flat, "full_well_e", where, required=False)
     if valid is not None:
         share = valid.mean(axis=(1, 2))

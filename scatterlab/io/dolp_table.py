@@ -26,6 +26,7 @@ import numpy as np
 
 from scatterlab.io.table import (
     angle_factor,
+    check_column_keys,
     format_table,
     mapped_columns_note,
     read_table,
@@ -148,7 +149,8 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
         polar angles beyond 90 deg (a negative one is read as the other side of the normal: |theta|,
         the azimuth + 180 deg), polar angles read in degrees that are all below pi/2 (radians read as
         degrees: at such angles the DOLP is near 0 and determines nothing), a DOLP outside [-0.05, 1.05]
-        (noise aside, a DOLP is in [0, 1]), a standard deviation <= 0, fewer than two rows.
+        (noise aside, a DOLP is in [0, 1]), a standard deviation <= 0, fewer than two rows; keys of
+        ``columns`` other than those above (naming them and the valid ones).
 
     Warns
     -----
@@ -160,6 +162,7 @@ def read_dolp_table(path, columns=None, *, angle_unit: str = "deg") -> DolpData:
     """
     f = angle_factor(angle_unit)
     unit = "deg" if f != 1.0 else "rad"
+    check_column_keys(columns, ALIASES, path)
     table = read_table(path)
     warn_if_header_disagrees(table, angle_unit)
     notes = []

@@ -28,6 +28,7 @@ import numpy as np
 from scatterlab.io.table import (
     ReaderOptions,
     angle_factor,
+    check_column_keys,
     column_hint,
     element_columns,
     element_name,
@@ -135,10 +136,12 @@ def read_ellipsometry(
     ValueError
         Naming the file, line and column: missing angle or element columns, non-numeric or
         non-finite cells, angles beyond 90 deg (a negative one is the mirror geometry: |theta|),
-        elements outside [-1 - tolerance, 1 + tolerance], negative standard deviations, several
-        wavelengths in one file.
+        elements outside [-1 - tolerance, 1 + tolerance], standard deviations <= 0, a wavelength
+        outside [0.01, 100] um (the message names the likely unit: 1064 read as um is 1064 nm),
+        several wavelengths in one file, unknown keys in ``columns``.
     """
     opt = ReaderOptions.of(angle_unit, wavelength_unit, time_convention, tolerance)
+    check_column_keys(columns, ("theta", "wavelength"), path, elements=True)
     table = read_table(path)
     warn_if_header_disagrees(table, angle_unit, time_convention)
     ai = table.find(_ANGLE, "theta", columns=columns)
@@ -219,11 +222,13 @@ def _elements(table, n, tolerance, columns=None):
                 f" (under another name: {column_hint('std_' + lacking[0])})"
             )
         S = stack(stds)
-        if np.any(S < 0):
-            row, c = np.argwhere(S < 0)[0]
+        if np.any(S <= 0):
+            row, c = np.argwhere(S <= 0)[0]
             raise ValueError(
                 f"{table.where(row)}, column {table.names[stds[IN_PLANE_ELEMENTS[c]][0]]!r}: "
-                f"standard deviation < 0"
+                f"standard deviation must be > 0, got {S[row, c]:g} (a measured element is never "
+                "exact: give its error, or leave the std columns out and the fit infers one error "
+                "from the scatter)"
             )
     out = np.abs(E) > 1 + tolerance
     if out.any():

@@ -49,6 +49,7 @@ import numpy as np
 from scatterlab.io.table import (
     ReaderOptions,
     angle_factor,
+    check_column_keys,
     circular_sign,
     column_hint,
     element_columns,
@@ -225,11 +226,15 @@ def _mueller(table, values, stds, where):
             )
         for (j, k), (i, normalised) in stds.items():
             s = table.values[:, i]
-            if np.any(s < 0):
-                row = int(np.argmax(s < 0))
+            # the normalised first element (m11/m11 = 1) is exact: its std may be 0
+            exact = (j, k) == (0, 0) and not M00_abs
+            bad = s < 0 if exact else s <= 0
+            if np.any(bad):
+                row = int(np.argmax(bad))
                 raise ValueError(
-                    f"{table.where(row)}, column {table.names[i]!r}: standard deviation {s[row]} < "
-                    "0"
+                    f"{table.where(row)}, column {table.names[i]!r}: standard deviation must be > 0, "
+                    f"got {s[row]:g} (a measured element is never exact: give its error, or leave "
+                    "the std columns out)"
                 )
             S[:, j, k] = s * (scale if normalised and (j, k) != (0, 0) else 1.0)
     return M, (S if stds else None), not M00_abs
@@ -347,11 +352,13 @@ def read_mueller_brdf(
     ------
     ValueError
         Naming the file, line and column: a missing or duplicated column, a cell that is not a
-        finite number, polar angles outside [-90, 90] deg, a non-positive wavelength, a negative
-        F_00 or standard deviation, an element larger than F_00 beyond ``tolerance``, a unit in a
-        header contradicting the arguments.
+        finite number, polar angles outside [-90, 90] deg, a wavelength outside [0.01, 100] um (the
+        message names the likely unit: 633 read as um is 633 nm), a negative F_00, a standard
+        deviation <= 0, an element larger than F_00 beyond ``tolerance``, a unit in a header
+        contradicting the arguments, unknown keys in ``columns``.
     """
     opt = ReaderOptions.of(angle_unit, wavelength_unit, time_convention, tolerance)
+    check_column_keys(columns, ALIASES, path, elements=True)
     table = read_table(path)
     warn_if_header_disagrees(table, angle_unit, time_convention)
     wi = table.find(ALIASES["wavelength"], "wavelength", columns=columns)

@@ -43,6 +43,10 @@ __all__ = [
     "time_convention_flip",
     "ReaderOptions",
     "wavelength_column",
+    "WAVELENGTH_RANGE_UM",
+    "wavelength_range_problem",
+    "likely_wavelength_unit",
+    "check_column_keys",
 ]
 
 ANGLE_UNITS = {"deg": np.pi / 180, "rad": 1.0}
@@ -575,8 +579,129 @@ class ReaderOptions:
         )
 
 
+# the wavelengths every reader accepts [um]: far ultraviolet to far infrared. A value outside is a
+# unit mistake far more often than a measurement (633 nm written where micrometres are expected)
+WAVELENGTH_RANGE_UM = (0.01, 100.0)
+
+
+def wavelength_range_problem(value, unit: str = "um") -> str | None:
+    """Why a wavelength is refused, or None when it lies in :data:`WAVELENGTH_RANGE_UM`.
+
+    The one range check of every reader that takes a wavelength (Mueller BRDF tables, ellipsometry,
+    datasets): it names the allowed range and, when the number written would lie in it in another
+    unit, that unit (``633`` read as um is 633 nm).
+
+    Parameters
+    ----------
+    value : float
+        The wavelength as written in the file, in ``unit``.
+    unit : str
+        The unit it is read in (``"m"``, ``"mm"``, ``"um"``, ``"nm"``).
+
+    Returns
+    -------
+    str or None
+        ``"wavelength 633 um is outside [0.01, 100] um: ..."``, or None.
+    """
+    value, unit = float(value), _unit(unit, LENGTH_UNITS, "wavelength unit")
+    lo, hi = WAVELENGTH_RANGE_UM
+    if lo <= value * LENGTH_UNITS[unit] / 1e-6 <= hi:
+        return None
+    message = f"wavelength {value:g} {unit} is outside [{lo:g}, {hi:g}] um"
+    u = likely_wavelength_unit(value, unit)
+    if u is not None:
+        message += (
+            f": a wavelength in {u} read as {unit}? ({value:g} {u} = "
+            f"{value * LENGTH_UNITS[u] / 1e-6:g} um)"
+        )
+    return message
+
+
+def likely_wavelength_unit(value, unit: str = "um") -> str | None:
+    """The unit in which a wavelength written as ``value`` lies in :data:`WAVELENGTH_RANGE_UM` (the
+    one nearest 1 um when several do), or None (also when it does in ``unit`` itself).
+
+    Parameters
+    ----------
+    value : float
+        The wavelength as written.
+    unit : str
+        The unit it is read in.
+
+    Returns
+    -------
+    str or None
+        ``"m"``, ``"mm"``, ``"um"`` or ``"nm"``.
+    """
+    lo, hi = WAVELENGTH_RANGE_UM
+    value, unit = float(value), _unit(unit, LENGTH_UNITS, "wavelength unit")
+    if not value > 0 or lo <= value * LENGTH_UNITS[unit] / 1e-6 <= hi:
+        return None
+    fits = [u for u in LENGTH_UNITS if lo <= value * LENGTH_UNITS[u] / 1e-6 <= hi]
+    return min(fits, key=lambda u: abs(np.log10(value * LENGTH_UNITS[u] / 1e-6)), default=None)
+
+
+def check_column_keys(columns, valid, path, *, elements: bool = False) -> None:
+    """Refuse keys of a reader's ``columns`` mapping that name no quantity the reader reads (a
+    misspelt ``"std_dop"`` would otherwise be ignored without a word).
+
+    Parameters
+    ----------
+    columns : dict or None
+        The reader's ``columns``.
+    valid : iterable of str
+        The quantities the reader takes.
+    path : str or Path
+        The file, for the message.
+    elements : bool
+        Mueller element names (``"m12"``, ``"std_m12"``, ``"f_r12/f_r11"``) are keys too.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    ValueError
+        Naming the unknown keys and listing the valid ones.
+    """
+    if not columns:
+        return
+    if not isinstance(columns, dict):
+        raise ValueError(
+            f"{path}: columns must be a dict {{quantity: column name}}, got {type(columns).__name__}"
+        )
+    valid = list(valid)
+
+    def known(key) -> bool:
+        if str(key) in valid:
+            return True
+        if not elements:
+            return False
+        try:
+            return parse_element(normalise_name(str(key))[0]) is not None
+        except ValueError:
+            return False
+
+    unknown = [k for k in columns if not known(k)]
+    if unknown:
+        import difflib
+
+        hints = [
+            f"{k!r} (did you mean {close[0]!r}?)" if close else repr(k)
+            for k in unknown
+            for close in [difflib.get_close_matches(str(k), valid, n=1, cutoff=0.6)]
+        ]
+        raise ValueError(
+            f"{path}: unknown key{'s' if len(unknown) > 1 else ''} in columns: {', '.join(hints)}; "
+            f"the valid keys are {', '.join(repr(v) for v in valid)}"
+            + (" and Mueller element names ('m12', 'std_m12', 'f_r12/f_r11')" if elements else "")
+        )
+
+
 def wavelength_column(table: "Table", i: int, factor: float) -> np.ndarray:
-    """Column ``i`` of ``table`` as wavelengths [m], checked against a unit in its header and > 0.
+    """Column ``i`` of ``table`` as wavelengths [m], checked against a unit in its header, > 0 and
+    within :data:`WAVELENGTH_RANGE_UM` (:func:`wavelength_range_problem`).
 
     Parameters
     ----------
@@ -597,6 +722,19 @@ def wavelength_column(table: "Table", i: int, factor: float) -> np.ndarray:
     if np.any(w <= 0):
         row = int(np.argmax(w <= 0))
         raise ValueError(f"{table.where(row)}, column {table.names[i]!r}: wavelength must be > 0")
+    for row, value in enumerate(table.values[:, i]):
+        problem = wavelength_range_problem(value, unit)
+        if problem:
+            likely = likely_wavelength_unit(value, unit)
+            raise ValueError(
+                f"{table.where(row)}, column {table.names[i]!r}: {problem}"
+                + (
+                    f"; read the file with wavelength_unit={likely!r} (--wavelength-unit {likely} on "
+                    "the command line)"
+                    if likely
+                    else ""
+                )
+            )
     return w
 
 

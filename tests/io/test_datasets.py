@@ -14,7 +14,7 @@ from scatterlab.io import (
 )
 
 
-def small(rng=0, truth=True, G=2, H=6, W=8):
+def small(rng=0, truth=True, G=2, H=8, W=10):
     rng = np.random.default_rng(rng)
     S = np.stack(
         [np.full((H, W), 100.0), rng.uniform(-30, 30, (H, W)), rng.uniform(-30, 30, (H, W))],
@@ -73,7 +73,7 @@ def test_round_trip_every_format(tmp_path, suffix, dofp):
     path = write_dataset(tmp_path / f"d{suffix}", ds, dofp_pattern=dofp)
     back = read_dataset(path)
     assert_same(ds, back)
-    assert back.shape == (2, 4, 6, 8)
+    assert back.shape == (2, 4, 8, 10)
     if dofp is not None:
         assert "demosaiced" in back.notes[0]
     if suffix == ".tif":
@@ -144,19 +144,19 @@ def edit_npz(tmp_path, **changes):
         ({"polarizer_deg": np.array([0.0, 45, 90])}, "3 angles for 4 channels"),
         ({"polarizer_deg": np.array([0.0, 180, 0, 180])}, "three different orientations"),
         ({"counts": np.zeros((2, 4, 6))}, "'counts' must have 4 dimensions"),
-        ({"counts": np.full((2, 4, 6, 8), np.nan)}, "'counts' contains NaN"),
+        ({"counts": np.full((2, 4, 8, 10), np.nan)}, "'counts' contains NaN"),
         ({"counts": np.zeros((2, 4, 0, 8))}, "'counts' is empty"),
         ({"theta_deg": np.radians([40.0, 55.0])}, "radians given as degrees"),
         ({"polarizer_deg": np.radians([0.0, 45, 90, 135])}, "span only 2.36 deg"),
-        ({"counts": -np.ones((2, 4, 6, 8))}, r"no photons .* at geometries \[0, 1\]"),
+        ({"counts": -np.ones((2, 4, 8, 10))}, r"no photons .* at geometries \[0, 1\]"),
         ({"wavelength_um": np.array(-1.0)}, "'wavelength_um' must be > 0"),
         ({"wavelength_um": np.array(1550.0)}, "outside"),
         ({"pixels_per_lambda_over_d": None}, "optics need"),
         ({"truth_dolp": np.zeros((2, 3, 3))}, "'truth_dolp' must have shape"),
         ({"truth_n": np.array([1.0])}, "one entry per label"),
-        ({"raw": np.zeros((2, 12, 16))}, "both 'counts' and 'raw'"),
+        ({"raw": np.zeros((2, 16, 20))}, "both 'counts' and 'raw'"),
         (
-            {"counts": np.broadcast_to(np.linspace(0.0, 100.0, 8) - 60.0, (2, 4, 6, 8)).copy()},
+            {"counts": np.broadcast_to(np.linspace(0.0, 100.0, 10) - 60.0, (2, 4, 8, 10)).copy()},
             r"'counts' at geometry 0 are negative by \d+% of their light .*too much dark",
         ),
         ({"format": np.array("another format")}, "'format' is"),
@@ -216,7 +216,7 @@ def test_users_tiff_stack_with_one_file_per_geometry_and_a_minimal_sidecar(tmp_p
     back = read_dataset(tmp_path / "plate.toml")
     np.testing.assert_allclose(back.counts, ds.counts, rtol=1e-6)
     assert back.truth is None and not back.simulated and back.read_noise is None
-    assert back.stokes().shape == (2, 6, 8, 3)
+    assert back.stokes().shape == (2, 8, 10, 3)
 
 
 def test_a_scene_toml_is_not_a_dataset(tmp_path):
@@ -342,11 +342,11 @@ def test_bad_pixels_round_trip_in_every_format(tmp_path):
     from scatterlab.io import with_pixel_mask
 
     ds = small()
-    bad = np.zeros((6, 8), bool)
+    bad = np.zeros((8, 10), bool)
     bad[2, 3] = bad[4, 0] = True
     masked = with_pixel_mask(ds, bad)
     valid = masked.valid_pixels()
-    assert valid.shape == (2, 6, 8) and np.array_equal(valid, np.broadcast_to(~bad, (2, 6, 8)))
+    assert valid.shape == (2, 8, 10) and np.array_equal(valid, np.broadcast_to(~bad, (2, 8, 10)))
     assert any("left out of the likelihood per geometry: [2, 2]" in n for n in masked.notes)
     full = float(ds.counts.max())
     masked = with_pixel_mask(masked, full_well=full)
@@ -355,7 +355,7 @@ def test_bad_pixels_round_trip_in_every_format(tmp_path):
         assert np.array_equal(back.valid_pixels(), valid), suffix
         assert back.full_well == full
     assert (tmp_path / "m-bad_pixels.tif").exists()
-    per_geometry = np.zeros((2, 6, 8), bool)
+    per_geometry = np.zeros((2, 8, 10), bool)
     per_geometry[1, 0, 0] = True
     both = with_pixel_mask(masked, per_geometry).valid_pixels()
     assert np.array_equal(both, valid & ~per_geometry)
@@ -379,11 +379,14 @@ def test_bad_pixels_on_a_dofp_raw_frame_mark_their_superpixel(tmp_path):
 @pytest.mark.parametrize(
     "changes, message",
     [
-        ({"bad_pixels": np.zeros((3, 6, 8))}, r"'bad_pixels' must have shape \(H, W\) = \(6, 8\)"),
+        (
+            {"bad_pixels": np.zeros((3, 8, 10))},
+            r"'bad_pixels' must have shape \(H, W\) = \(8, 10\)",
+        ),
         ({"bad_pixels": np.zeros((5, 8))}, "'bad_pixels' must have shape"),
-        ({"bad_pixels": np.full((6, 8), np.nan)}, "'bad_pixels' contains NaN"),
-        ({"bad_pixels": np.ones((6, 8))}, r"leaves 0.0% of the pixels at geometry 0"),
-        ({"bad_pixel": np.zeros((6, 8))}, r"did you mean 'bad_pixels'"),
+        ({"bad_pixels": np.full((8, 10), np.nan)}, "'bad_pixels' contains NaN"),
+        ({"bad_pixels": np.ones((8, 10))}, r"leaves 0.0% of the pixels at geometry 0"),
+        ({"bad_pixel": np.zeros((8, 10))}, r"did you mean 'bad_pixels'"),
         ({"full_well_e": np.array(-5.0)}, "'full_well_e' must be > 0"),
         ({"full_well": np.array(9e4)}, r"did you mean 'full_well_e'"),
     ],

@@ -70,7 +70,7 @@ def test_zero_based_names_absolute_first_element_and_radians(tmp_path):
         (
             "theta,m12,m22,m33,m34,std_m12,std_m22,std_m33,std_m34",
             "10,0,1,1,0,0.1,-0.1,0.1,0.1",
-            "line 2, column 'std_m22'.*< 0",
+            "line 2, column 'std_m22': standard deviation must be > 0",
         ),
         ("theta,m12,m22,m33,m34,lambda", "10,0,1,1,0,1.0\n20,0,1,1,0,1.5", "several wavelengths"),
         ("angle_of_something,m12,m22,m33,m34", "10,0,1,1,0", "missing column for theta"),

@@ -168,8 +168,12 @@ def test_units_and_normalised_only(tmp_path):
     assert back.normalised and np.all(back.mueller[:, 0, 0] == 1)
     np.testing.assert_allclose(back.mueller, data.mueller, atol=1e-14)
     np.testing.assert_allclose(back.theta_r, data.theta_r, atol=1e-14)
-    wrong = read_mueller_brdf(path, wavelength_unit="um", angle_unit="rad")
-    np.testing.assert_allclose(wrong.wavelength, data.wavelength * 1e3)  # stated and overridable
+    # read in the wrong unit, the nanometres are micrometres out of any optical range: refused, naming
+    # the unit they are in
+    with pytest.raises(
+        ValueError, match=r"n.csv, line \d+, column 'lambda': wavelength .* um is outside"
+    ):
+        read_mueller_brdf(path, wavelength_unit="um", angle_unit="rad")
 
 
 def test_radians_read_as_degrees_are_pointed_out(tmp_path):
