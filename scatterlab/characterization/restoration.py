@@ -65,6 +65,8 @@ LAYOUT_FRAMES_ROUNDS = 30
 PHASE_DIVERSITY_SMOOTHING = (8.0, 6.0, 4.0, 3.0, 2.0, 1.0, 0.5)
 PHASE_DIVERSITY_ITERATIONS = 300
 PHASE_DIVERSITY_FINAL_ITERATIONS = 2000
+# the highest DOLP a restoration hands on as the start of its classification pass (the EM refuses 1)
+DOLP_START_MAX = 1.0 - 1e-9
 
 
 @dataclass
@@ -525,7 +527,11 @@ def _em(acq: Acquisition, settings: RestoreSettings, known_psf: bool, seed: int)
             iterations=steps,
             priors=settings.priors,
             s0_start=s0,
-            dolp_start=ml.dolp if starts == 1 else np.nan_to_num(dolp, nan=0.0),
+            # a restoration can end at DOLP 1 (an overshoot beside the metal), which the EM refuses
+            # as a start (a multiplicative update never moves it): just below 1 the priors can
+            dolp_start=np.clip(
+                ml.dolp if starts == 1 else np.nan_to_num(dolp, nan=0.0), 0.0, DOLP_START_MAX
+            ),
             **kw,
         )
         loglik_classes = cont.loglik

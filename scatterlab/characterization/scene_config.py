@@ -12,7 +12,7 @@ geometry_deg = [30, 35, 40, 45, 50, 55, 60]   # specular theta_i = theta_r per a
 d_over_r0 = [7.9, 12.9]               # turbulence strengths; a no-turbulence case is always included
 photons = 100000                      # expected photo-electrons at the brightest channel pixel (full well)
 read_noise = 10.0                     # e- rms
-polarizer_deg = [0, 45, 90, 135]
+polarizer_deg = [0, 45, 90, 135]       # at least three distinct angles (mod 180 deg), each in [-360, 360] deg
 iterations = 150                      # EM iterations per acquisition
 psf_model = "pupil"                   # PSF update: "pupil" (Schulz, GS steps) or "em" (non-parametric, Eq. 194)
 psf_refine = "none"                   # "layout": refine each blind PSF with a few-material object
@@ -28,7 +28,8 @@ phase_diversity_waves = 0.0           # > 0: two unpolarized cameras defocused b
                                       # image restored with it known; 0: blind deconvolution
 phase_diversity_share = 0.3333        # share of the light the beam splitter sends to those two cameras
 priors = "ch7"                        # DOLP prior set for the classification (ch5, ch6, ch7) or "none"
-estimate = ["classes", "n_kappa", "posterior"]   # what to compute (leave out what is not needed)
+estimate = ["classes", "n_kappa", "posterior"]   # what to compute (leave out what is not needed; [] restores
+                                      # the images and scores them, DOLP and S0 errors and PSF distances, only)
 sigma_known = 0.3                     # roughness used by the n, kappa inversion (the reference measured it)
 posterior_steps = 1500
 calibration_replicates = 4            # re-simulations per geometry that calibrate a blind restoration's bias
@@ -119,6 +120,19 @@ class Plate:
         return out
 
     def validate(self, where: str = "plates") -> "Plate":
+        """Check every key (type and range); ValueError names the key (``where.key``).
+
+        Parameters
+        ----------
+        where : str
+            The plate's place in the scene, for the messages (e.g. ``"plates[0]"``).
+
+        Returns
+        -------
+        Plate
+            ``self``.
+        """
+        _check_types(self, where)
         if not isinstance(self.metal, str) or not self.metal.isidentifier():
             raise ValueError(
                 f"{where}.metal must be a name (letters, digits, _), got {self.metal!r}"
@@ -194,18 +208,18 @@ class SceneConfig:
         """Check every key (type and range) before anything runs; ValueError names the key."""
         _check_types(self)
         _check_ranges(self)
-        if not self.plates:
+        if not isinstance(self.plates, list) or not self.plates:
             raise ValueError(
                 "plates: at least one [[plates]] entry is needed (an empty list is not allowed)"
             )
-        names = [p.metal for p in self.plates]
-        if len(set(names)) != len(names):
-            raise ValueError(f"plates: each plate needs its own metal name, got {names}")
+        # each plate's keys first: a metal that is not a name (a list, a table) cannot be compared
         for k, p in enumerate(self.plates):
             if not isinstance(p, Plate):
                 raise ValueError(f"plates[{k}] must be a table of plate keys")
-            _check_types(p, f"plates[{k}]")
             p.validate(f"plates[{k}]")
+        names = [p.metal for p in self.plates]
+        if len(set(names)) != len(names):
+            raise ValueError(f"plates: each plate needs its own metal name, got {names}")
         return self
 
 
@@ -288,6 +302,10 @@ def _check_wavelength(v) -> None:
         )
 
 
+# the polarizer angles a scene may give [deg]: a full turn either way (beyond it, a typing error)
+POLARIZER_RANGE_DEG = (-360.0, 360.0)
+
+
 def _check_ranges(cfg: SceneConfig) -> None:
     import numpy as np
 
@@ -318,8 +336,14 @@ def _check_ranges(cfg: SceneConfig) -> None:
             f"plate_center must be [row, column] in template units within [0, 16], "
             f"got {cfg.plate_center}"
         )
+    lo, hi = POLARIZER_RANGE_DEG
+    if not all(math.isfinite(x) and lo <= x <= hi for x in cfg.polarizer_deg):
+        raise ValueError(
+            f"polarizer_deg entries must be finite angles in [{lo:g}, {hi:g}] deg, "
+            f"got {cfg.polarizer_deg}"
+        )
     a = np.mod(np.radians(cfg.polarizer_deg), np.pi)
-    if len(np.unique(np.round(a, 9))) < 3 or not all(math.isfinite(x) for x in cfg.polarizer_deg):
+    if len(np.unique(np.round(a, 9))) < 3:
         raise ValueError(
             f"polarizer_deg needs at least three distinct angles (mod 180 deg), "
             f"got {cfg.polarizer_deg}"
@@ -512,7 +536,8 @@ def load_scene(path) -> SceneConfig:
                     f"{path}: unknown key(s) {sorted(bad)} in plates[{k}]; allowed: {sorted(pk)}"
                 )
             missing = [key for key in ("metal_n", "metal_kappa") if key not in p]
-            if p.get("metal", "aluminium") != "aluminium" and missing:
+            metal = p.get("metal", "aluminium")  # not a string: validate() names it below
+            if isinstance(metal, str) and metal != "aluminium" and missing:
                 import warnings
 
                 warnings.warn(

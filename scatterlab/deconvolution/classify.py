@@ -141,10 +141,15 @@ def classify_unmixing(
     medians are repeated until the classes stop changing. It assumes, as the plate scenes do, that each
     material is uniform over the field at one geometry.
 
+    A pixel without light (``s0 <= 0``) has the Stokes vector 0, as near to one material as to another:
+    it keeps its class from ``classes`` and takes no part in the materials' Stokes vectors; an image
+    without light comes back as ``classes`` (-1 where unmeasured).
+
     Parameters
     ----------
     s0 : array_like, shape (H, W)
-        Irradiance [photo-electrons]; NaN or masked (numpy masked array) where unmeasured.
+        Irradiance [photo-electrons]; NaN or masked (numpy masked array) where unmeasured; ``<= 0`` is no
+        light (the pixel keeps its class).
     dolp : array_like, shape (H, W)
         Signed DOLP :math:`S_1/S_0` (the geometry fixes the angle of polarization); NaN or masked where
         unmeasured.
@@ -159,7 +164,8 @@ def classify_unmixing(
     Returns
     -------
     ndarray of int, shape (H, W)
-        The refined classes (the labels of ``classes``; -1 where ``classes`` is -1 or the pixel unmeasured).
+        The refined classes (the labels of ``classes``; -1 where ``classes`` is -1 or the pixel unmeasured;
+        the class of ``classes`` where there is no light).
     """
     # masked pixels of numpy masked arrays (imaging's DOLP images) are unmeasured, as NaN ones are
     s0 = np.ma.filled(np.ma.asarray(s0, float), np.nan)
@@ -175,11 +181,15 @@ def classify_unmixing(
         raise ValueError(f"iterations must be an integer >= 1, got {iterations!r}")
     measured = np.isfinite(s0) & np.isfinite(P) & (lab >= 0)
     lab = np.where(measured, lab, -1).astype(int)
-    X = np.stack([np.where(measured, s0, 0.0), np.where(measured, s0 * P, 0.0)], axis=-1)
+    # no light: a Stokes vector 0, equidistant from every material -- the pixel keeps its class
+    lit = measured & (s0 > 0)
+    dark = np.where(measured & ~lit, lab, -1)
+    lab = np.where(lit, lab, -1)
+    X = np.stack([np.where(lit, s0, 0.0), np.where(lit, s0 * P, 0.0)], axis=-1)
     for _ in range(int(iterations)):
         names = np.unique(lab[lab >= 0])
         if len(names) < 2:  # one material: nothing to unmix
-            return lab
+            break
         medians = np.array([np.median(P[lab == k]) for k in names])
         lowest, highest = names[np.argmin(medians)], names[np.argmax(medians)]
         ends = []
@@ -190,8 +200,8 @@ def classify_unmixing(
             keep = toward >= np.quantile(toward, 1 - purest)
             ends.append(np.median(X[lab == k][keep], axis=0))
         d2 = np.stack([np.sum((X - e) ** 2, axis=-1) for e in ends])
-        new = np.where(measured, names[np.argmin(d2, axis=0)], -1)
+        new = np.where(lit, names[np.argmin(d2, axis=0)], -1)
         if np.array_equal(new, lab):
             break
         lab = new
-    return lab
+    return np.where(lit, lab, dark)

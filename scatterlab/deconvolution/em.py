@@ -138,7 +138,7 @@ class PSFOptions:
         (a lost exposure) keeps its start PSF: it carries no information on it.
     radius : PSF support radius [pixels]; None: a quarter of the smaller data side.
     gs_steps : Gerchberg-Saxton steps (``mode="pupil"``) or L-BFGS iterations (``mode="phase"``) per
-        iteration.
+        iteration, an integer >= 0.
     """
 
     mode: str = "em"
@@ -156,7 +156,8 @@ class PolarizationOptions:
     ----------
     aop : float or array ``(H, W)`` [rad], optional -- the AOP when the geometry fixes it (None means 0:
         unpolarized light observed in the specular plane, Ch. VII); the start when ``estimate_aop`` (None:
-        the AOP of the least-squares Stokes images of the data).
+        the AOP of the least-squares Stokes images of the data). Finite, in [-2 pi, 2 pi] (a value beyond
+        a full turn is degrees: use numpy.radians), broadcasting to the data's image shape ``(H, W)``.
     estimate_aop : estimate a per-pixel AOP (LeMaster and Cain's M-step, Sec. 3.3.2) instead of keeping
         ``aop`` -- for geometries that do not fix it (off the specular plane, polarized sources).
     priors : tuple of SuperGaussianPrior, optional -- one: MAP DOLP; several: per-pixel classification. A key
@@ -202,9 +203,13 @@ class StartOptions:
 
     Parameters
     ----------
-    s0 : float or array ``(H, W)`` [counts], optional -- the text's start is 1.
-    dolp : float or array ``(H, W)``, optional -- the text's start is 0.5 (a DOLP of 0 stays 0: the
-        unpolarized EM is Richardson-Lucy).
+    s0 : float or array ``(H, W)`` [counts], optional -- the text's start is 1. Finite, >= 0, some light,
+        broadcasting to the data's image shape ``(H, W)``.
+    dolp : float or array ``(H, W)``, optional -- the text's start is 0.5. An unsigned DOLP in [0, 1)
+        (the orientation is the AOP, ``aop``), broadcasting to ``(H, W)``. The updates are multiplicative:
+        without priors a DOLP of 0 stays 0 (``dolp=0`` everywhere runs the unpolarized EM, which is
+        Richardson-Lucy) and one of 1 would stay 1 whatever the data say, so 1 is refused, and so is a
+        negative (signed) DOLP, which the model cannot represent (it was read as 0).
     """
 
     s0: object = None
@@ -531,9 +536,17 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
         and 0 <= pad <= 2 * max(H, W)
     ):
         raise ValueError(f"pad must be an integer in [0, {2 * max(H, W)}] pixels, got {pad!r}")
-    _check_start_and_stop(opts)
+    as_count(opts.psf.gs_steps, "gs_steps", 0)
+    _check_start_and_stop(opts, (H, W))
     if psf0 is not None:
-        p0 = np.asarray(psf0, float)
+        try:
+            p0 = np.asarray(psf0, float)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"psf0 must be a numeric array (a PSF), got {psf0!r}") from exc
+        if p0.ndim not in (2, 3):
+            raise ValueError(
+                f"psf0 must have shape (Hp, Wp) or (P, Hp, Wp) on the object grid, got {p0.shape}"
+            )
         if not np.all(np.isfinite(p0)) or np.any(p0 < 0) or not np.all(p0.sum(axis=(-2, -1)) > 0):
             raise ValueError("psf0 must be finite and non-negative with a positive sum (a PSF)")
     if mode == "fixed" and psf0 is None:
@@ -548,22 +561,44 @@ def _check_inputs(data, angles, psf0, pupil, opts: EMOptions):
     return d, th
 
 
-def _check_start_and_stop(opts: EMOptions) -> None:
-    """The start object, the fixed AOP and the stopping rule: each a ValueError naming it."""
+def _image_option(value, name: str, shape) -> np.ndarray:
+    """``value`` as a float array broadcasting to the image ``shape`` (H, W); ValueError naming ``name``."""
+    try:
+        a = np.asarray(value, float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a number or an array of numbers, got {value!r}") from exc
+    try:
+        np.broadcast_to(a, shape)
+    except ValueError as exc:
+        raise ValueError(
+            f"{name} must be a number or an array of the data's image shape {tuple(shape)} (H, W), "
+            f"got shape {a.shape}"
+        ) from exc
+    return a
+
+
+def _check_start_and_stop(opts: EMOptions, shape) -> None:
+    """The start object, the fixed AOP and the stopping rule: each a ValueError naming it; ``shape`` is
+    the data's image shape (H, W)."""
     s0, dolp, aop = opts.start.s0, opts.start.dolp, opts.polarization.aop
     if s0 is not None:
-        a = np.asarray(s0, float)
+        a = _image_option(s0, "s0_start", shape)
         if not (np.all(np.isfinite(a) & (a >= 0)) and np.any(a > 0)):
             raise ValueError(
                 "s0_start must be finite and >= 0 counts with some light (the EM's updates are "
                 "multiplicative: a pixel that starts at 0 stays 0)"
             )
     if dolp is not None:
-        p = np.asarray(dolp, float)
-        if not np.all((p >= -1) & (p <= 1)):
-            raise ValueError("dolp_start must be finite and in [-1, 1] (a signed DOLP)")
-    if aop is not None and not np.all(np.isfinite(np.asarray(aop, float))):
-        raise ValueError("aop must be finite [rad]")
+        p = _image_option(dolp, "dolp_start", shape)
+        if not np.all((p >= 0) & (p < 1)):
+            raise ValueError(
+                "dolp_start must be finite and in [0, 1) (an unsigned DOLP; the orientation is aop): "
+                "the EM's updates are multiplicative, so a DOLP of 1 never moves, and a negative "
+                "(signed) DOLP cannot be represented -- for light polarized across aop give |DOLP| "
+                "and aop + pi/2. 0 stays 0 without priors (the unpolarized, Richardson-Lucy EM)"
+            )
+    if aop is not None:
+        as_turn(_image_option(aop, "aop", shape), "aop", "AOPs")
     its = opts.stop.iterations
     as_count(its, "iterations", 0)
     tol = opts.stop.tol
@@ -920,9 +955,9 @@ def blind_deconvolve(
     data : array (K, H, W) [photo-electrons] -- negative values (read noise after dark subtraction) are
         clipped at 0 for the Poisson model; NaN is not allowed: give missing pixels any finite value and
         leave them out with ``mask`` (0 photons alone would read as a black spot of DOLP 0, i.e. metal).
-    angles : array (K,) [rad] -- polarizer angles.
-    psf0 : array (Hp, Wp) or (P, Hp, Wp) on the object grid, optional -- initial or known PSF(s) (centred),
-        P = ``frames`` with a shared PSF, K without.
+    angles : array (K,) [rad] -- polarizer angles, in [-2 pi, 2 pi] (degrees are refused).
+    psf0 : array (Hp, Wp) or (P, Hp, Wp) on the object grid, optional -- initial or known PSF(s) (centred,
+        finite, >= 0, positive sum), P = ``frames`` with a shared PSF, K without.
     pupil : array (n, n), optional -- aperture for ``psf_mode="pupil"`` and the diffraction-limited start.
     options : EMOptions, optional
     **keywords : the flat option names above (unknown names raise TypeError).
@@ -1114,7 +1149,8 @@ def object_grid(data_shape, psf_radius=None, boundary: str = "reeves", pad=None)
     data_shape : tuple of int
         Shape ``(H, W)`` of the data frames [pixels], integers >= 1.
     psf_radius : float, optional
-        PSF support radius [pixels], > 0; default ``min(H, W) / 4``.
+        PSF support radius [pixels], in ``(0, hypot(H, W)]`` (at most the image's diagonal); default
+        ``min(H, W) / 4``.
     boundary : str
         ``"reeves"`` (padded object grid) or any other boundary (object grid = data grid).
     pad : int, optional
@@ -1139,6 +1175,11 @@ def object_grid(data_shape, psf_radius=None, boundary: str = "reeves", pad=None)
         raise ValueError(f"psf_radius must be a single float > 0 [pixels], got {psf_radius!r}")
     else:
         psf_radius = float(as_positive(psf_radius, "psf_radius"))
+        if psf_radius > np.hypot(H, W):
+            raise ValueError(
+                f"psf_radius must be in (0, {np.hypot(H, W):.4g}] pixels (the image's diagonal), got "
+                f"{psf_radius!r}"
+            )
     if pad is None:
         pad = int(np.ceil(psf_radius)) if boundary == "reeves" else 0
     return (H + 2 * pad, W + 2 * pad) if boundary == "reeves" else (H, W)

@@ -25,6 +25,7 @@ an end of the interval, the one of larger objective.
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,13 +49,19 @@ class SuperGaussianPrior:
     Parameters
     ----------
     c2 : float
-        Stiffness (> 0, 1/DOLP): the half-width of the plateau is about 1 / c2.
+        Stiffness (a finite real number > 0, 1/DOLP): the half-width of the plateau is about 1 / c2;
+        ``c2^m <= 1e300``.
     c3 : float
-        Centre DOLP in [0, 1].
+        Centre DOLP, a real number in [0, 1].
     m : int
-        Even order >= 2 (the text's 10).
+        Even integer order >= 2 (the text's 10).
     name : str
         Material class label.
+
+    Raises
+    ------
+    ValueError
+        A constant of the wrong type (e.g. a string) or outside its range; the message names it.
     """
 
     c2: float
@@ -63,8 +70,11 @@ class SuperGaussianPrior:
     name: str = ""
 
     def __post_init__(self):
-        if self.m < 2 or self.m % 2:
-            raise ValueError(f"m must be an even integer >= 2, got {self.m}")
+        m = self.m
+        if isinstance(m, (bool, np.bool_)) or not isinstance(m, numbers.Integral) or m < 2 or m % 2:
+            raise ValueError(f"m must be an even integer >= 2, got {m!r}")
+        for name in ("c2", "c3"):
+            _check_real(getattr(self, name), name)
         if not (np.isfinite(self.c2) and self.c2 > 0):
             raise ValueError(f"c2 must be finite and > 0, got {self.c2!r}")
         if not (np.isfinite(self.c3) and 0 <= self.c3 <= 1):
@@ -91,6 +101,18 @@ class SuperGaussianPrior:
         with np.errstate(divide="ignore"):
             logx = np.log(x)
         return -np.exp(np.minimum(self.m * logx, np.log(1e300)))
+
+
+def _check_real(value, name: str) -> None:
+    """ValueError naming ``name`` unless ``value`` is one real number (not a string, bool or array)."""
+    ok = not isinstance(value, (str, bytes, bool, np.bool_)) and np.ndim(value) == 0
+    if ok:
+        try:
+            float(value)
+        except (TypeError, ValueError):
+            ok = False
+    if not ok:
+        raise ValueError(f"{name} must be a real number, got {value!r}")
 
 
 PRIOR_SETS = {
@@ -259,7 +281,8 @@ def dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1
     prior : SuperGaussianPrior or None
         The DOLP prior (Eq. 195); None gives the ML update Q / T.
     weight : float
-        Weight w of the log prior in the objective (dimensionless, finite, >= 0, default 1).
+        Weight w of the log prior in the objective: one number (dimensionless, finite, >= 0, default 1),
+        not an array.
 
     Returns
     -------
@@ -268,6 +291,11 @@ def dolp_update(T, Q, prior: SuperGaussianPrior | None = None, weight: float = 1
     """
     T = as_positive(T, "T", allow_zero=True)
     Q = as_finite(Q, "Q")
+    if np.ndim(weight) != 0:
+        raise ValueError(
+            f"weight must be a single number >= 0 (one weight for every pixel), got shape "
+            f"{np.shape(weight)}"
+        )
     weight = float(as_positive(weight, "weight", allow_zero=True))
     return _dolp_update(T, Q, prior, weight)
 
@@ -464,7 +492,8 @@ def adaptive_priors(dolp, base=PRIOR_SETS["ch5"], *, m: int = 10, mask=None):
     ----------
     dolp : array_like
         DOLP image (any shape, dimensionless); NaN pixels, and the masked ones of a numpy masked array (as
-        :func:`scatterlab.imaging.dolp_aop_from_stokes` returns), are ignored.
+        :func:`scatterlab.imaging.dolp_aop_from_stokes` returns), are ignored. Every other value must be
+        finite and in [0, 1] (clip a noisy estimate with ``numpy.clip(dolp, 0, 1)``).
     base : str or tuple of SuperGaussianPrior
         The set whose names are kept (default Ch. V's), or its key in :data:`PRIOR_SETS`.
     m : int
@@ -480,7 +509,8 @@ def adaptive_priors(dolp, base=PRIOR_SETS["ch5"], *, m: int = 10, mask=None):
     Raises
     ------
     ValueError
-        Fewer than 10 finite DOLP values, or values with no contrast to separate classes: all within
+        ``dolp`` not numeric, a used value infinite or outside [0, 1], or ``mask`` not of ``dolp``'s
+        shape; fewer than 10 finite DOLP values, or values with no contrast to separate classes: all within
         0.01 of each other (the narrowest standard deviation of the priors it returns), e.g. a constant
         image. Priors re-centred there would be indistinguishable (scipy's two-means left a cluster
         empty and two identical priors came back); classify such an image with fixed priors
@@ -489,10 +519,28 @@ def adaptive_priors(dolp, base=PRIOR_SETS["ch5"], *, m: int = 10, mask=None):
     from scipy.cluster.vq import kmeans2
 
     base = _prior_set(base, "base")
-    v = np.ma.filled(
-        np.ma.asarray(dolp, float), np.nan
-    )  # masked pixels (imaging's DOLP images) are left out
-    v = v[np.isfinite(v) & (mask if mask is not None else True)].ravel()
+    try:  # masked pixels (imaging's DOLP images) are left out
+        v = np.ma.filled(np.ma.asarray(dolp, float), np.nan)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"dolp must be a numeric DOLP image, got {dolp!r}") from exc
+    if mask is not None:
+        mask = np.asarray(mask)
+        if mask.dtype != bool or mask.shape != v.shape:
+            raise ValueError(
+                f"mask must be a boolean array of dolp's shape {v.shape}, got {mask.dtype} {mask.shape}"
+            )
+        v = v[mask]
+    v = v[~np.isnan(v)].ravel()  # NaN: a pixel without light
+    if np.isinf(v).any():
+        raise ValueError(
+            "dolp must be finite where it is used: it holds inf (NaN and masked pixels are ignored)"
+        )
+    if np.any((v < 0) | (v > 1)):
+        worst = float(v[np.argmax(np.maximum(-v, v - 1))])
+        raise ValueError(
+            f"dolp must be in [0, 1], got {worst:g} (a noisy estimate can be clipped with "
+            "numpy.clip(dolp, 0, 1); NaN and masked pixels are ignored)"
+        )
     if v.size < 10:
         raise ValueError("adaptive_priors needs at least 10 finite DOLP values")
     spread = float(np.ptp(v))

@@ -62,10 +62,11 @@ def resample_psf(h, shape) -> np.ndarray:
 
     Parameters
     ----------
-    h : ndarray, shape (Hs, Ws)
-        Centred PSF.
+    h : array_like, shape (Hs, Ws)
+        Centred PSF: finite and >= 0 (light is never negative; clip round-off with
+        ``numpy.clip(h, 0, None)``).
     shape : tuple of int
-        Target shape ``(H, W)`` [pixels].
+        Target shape ``(H, W)`` [pixels], two integers >= 1.
 
     Returns
     -------
@@ -75,11 +76,28 @@ def resample_psf(h, shape) -> np.ndarray:
     Raises
     ------
     ValueError
-        No light is left after the crop.
+        ``h`` not a finite non-negative 2-D array, ``shape`` not two integers >= 1, or no light left after
+        the crop.
     """
-    out = np.zeros(shape)
+    try:
+        h = np.asarray(h, float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"h must be a numeric 2-D PSF, got {h!r}") from exc
+    if h.ndim != 2:
+        raise ValueError(f"h must be a 2-D PSF (Hs, Ws), got shape {h.shape}")
+    if not np.all(np.isfinite(h)) or np.any(h < 0):
+        raise ValueError(
+            "h must be finite and >= 0 (a PSF: light is never negative; clip round-off with "
+            "numpy.clip(h, 0, None))"
+        )
+    bad_shape = f"shape must be (H, W), two integers >= 1 [pixels], got {shape!r}"
+    try:
+        H, W = shape
+        H, W = as_count(H, "H", 1), as_count(W, "W", 1)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(bad_shape) from exc
+    out = np.zeros((H, W))
     Hs, Ws = h.shape
-    H, W = shape
     ch, cw = min(H, Hs), min(W, Ws)
     out[(H - ch) // 2 : (H - ch) // 2 + ch, (W - cw) // 2 : (W - cw) // 2 + cw] = h[
         (Hs - ch) // 2 : (Hs - ch) // 2 + ch, (Ws - cw) // 2 : (Ws - cw) // 2 + cw

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_finite, as_positive, broadcast
+from scatterlab._checks import as_finite, as_positive, as_turn, broadcast
 
 __all__ = [
     "rotation",
@@ -40,13 +40,13 @@ def rotation(angle) -> np.ndarray:
     Parameters
     ----------
     angle : array_like
-        Rotation angle [rad].
+        Rotation angle [rad], in [-2 pi, 2 pi] (degrees are refused).
 
     Returns
     -------
     R : ndarray, shape ``(..., 2, 2)``.
     """
-    a = as_finite(angle, "angle")
+    a = as_turn(angle, "angle", "rotation angles")
     c, s = np.cos(a), np.sin(a)
     return np.stack([np.stack([c, s], -1), np.stack([-s, c], -1)], -2)
 
@@ -57,7 +57,7 @@ def rotate_jones(J, angle) -> np.ndarray:
     Parameters
     ----------
     J : array_like, shape ``(..., 2, 2)``
-    angle : array_like [rad], broadcast against ``J.shape[:-2]``.
+    angle : array_like [rad], in [-2 pi, 2 pi] (degrees are refused); broadcast against ``J.shape[:-2]``.
 
     Returns
     -------
@@ -74,7 +74,7 @@ def linear_polarizer_jones(angle=0.0, extinction_ratio=0.0) -> np.ndarray:
     Parameters
     ----------
     angle : array_like
-        Transmission axis from the s axis [rad].
+        Transmission axis from the s axis [rad], in [-2 pi, 2 pi] (degrees are refused).
     extinction_ratio : array_like
         Intensity transmittance of the blocked axis relative to the pass axis,
         in ``[0, 1]`` (0 = ideal polarizer).
@@ -86,7 +86,9 @@ def linear_polarizer_jones(angle=0.0, extinction_ratio=0.0) -> np.ndarray:
     eps = as_positive(extinction_ratio, "extinction_ratio", allow_zero=True)
     if np.any(eps > 1):
         raise ValueError("extinction_ratio must be in [0, 1]")
-    angle, eps = broadcast(angle=as_finite(angle, "angle"), extinction_ratio=eps)
+    angle, eps = broadcast(
+        angle=as_turn(angle, "angle", "transmission-axis angles"), extinction_ratio=eps
+    )
     J = np.zeros(angle.shape + (2, 2), complex)
     J[..., 0, 0] = 1.0
     J[..., 1, 1] = np.sqrt(eps)
@@ -104,14 +106,15 @@ def linear_retarder_jones(retardance, fast_axis=0.0) -> np.ndarray:
     retardance : array_like
         Retardance :math:`\delta` [rad] (``pi/2`` for a quarter-wave plate).
     fast_axis : array_like
-        Fast-axis angle from the s axis [rad].
+        Fast-axis angle from the s axis [rad], in [-2 pi, 2 pi] (degrees are refused).
 
     Returns
     -------
     J : ndarray, shape ``(..., 2, 2)``, complex, unitary.
     """
     d, t = broadcast(
-        retardance=as_finite(retardance, "retardance"), fast_axis=as_finite(fast_axis, "fast_axis")
+        retardance=as_finite(retardance, "retardance"),
+        fast_axis=as_turn(fast_axis, "fast_axis", "fast-axis angles"),
     )
     J = np.zeros(d.shape + (2, 2), complex)
     J[..., 0, 0] = np.exp(0.5j * d)
@@ -125,13 +128,13 @@ def rotator_jones(rotation_angle) -> np.ndarray:
     Parameters
     ----------
     rotation_angle : array_like
-        Rotation angle [rad].
+        Rotation angle [rad], in [-2 pi, 2 pi] (degrees are refused).
 
     Returns
     -------
     J : ndarray, shape ``(..., 2, 2)``; equals ``rotation(-rotation_angle)``.
     """
-    return rotation(-as_finite(rotation_angle, "rotation_angle")).astype(complex)
+    return rotation(-as_turn(rotation_angle, "rotation_angle", "rotation angles")).astype(complex)
 
 
 def linear_jones_vector(angle) -> np.ndarray:
@@ -140,13 +143,13 @@ def linear_jones_vector(angle) -> np.ndarray:
     Parameters
     ----------
     angle : array_like
-        Polarization angle from s towards p [rad].
+        Polarization angle from s towards p [rad], in [-2 pi, 2 pi] (degrees are refused).
 
     Returns
     -------
     E : ndarray, shape ``(..., 2)``, complex.
     """
-    a = as_finite(angle, "angle")
+    a = as_turn(angle, "angle", "polarization angles")
     return np.stack([np.cos(a), np.sin(a)], -1).astype(complex)
 
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_finite, as_positive, broadcast
+from scatterlab._checks import as_finite, as_positive, as_turn, broadcast
 
 __all__ = [
     "jones_to_mueller",
@@ -180,8 +180,8 @@ def apply(M, S) -> np.ndarray:
     return np.einsum("...ij,...j->...i", M, S)
 
 
-def _frame_rotation(angle) -> np.ndarray:
-    a = as_finite(angle, "angle")
+def _frame_rotation(angle, name: str = "angle") -> np.ndarray:
+    a = as_turn(angle, name, "rotation angles")
     c, s = np.cos(2 * a), np.sin(2 * a)
     R = np.zeros(a.shape + (4, 4))
     R[..., 0, 0] = R[..., 3, 3] = 1
@@ -202,7 +202,7 @@ def rotate_mueller(M, angle) -> np.ndarray:
     ----------
     M : array_like, shape ``(..., 4, 4)`` or ``(..., 3, 3)``
         Mueller matrices, or their linear blocks.
-    angle : array_like [rad], from the s axis towards p.
+    angle : array_like [rad], from the s axis towards p, in [-2 pi, 2 pi] (degrees are refused).
 
     Returns
     -------
@@ -230,7 +230,7 @@ def diattenuator(t_max=1.0, t_min=0.0, angle=0.0) -> np.ndarray:
     t_max, t_min : array_like
         Intensity transmittances along and across ``angle``, ``0 <= t_min <= t_max <= 1``.
     angle : array_like
-        Axis of maximum transmittance, from s towards p [rad].
+        Axis of maximum transmittance, from s towards p [rad], in [-2 pi, 2 pi] (degrees are refused).
 
     Returns
     -------
@@ -240,7 +240,7 @@ def diattenuator(t_max=1.0, t_min=0.0, angle=0.0) -> np.ndarray:
     r = as_positive(t_min, "t_min", allow_zero=True)
     if np.any(q > 1) or np.any(r > q):
         raise ValueError("transmittances must satisfy 0 <= t_min <= t_max <= 1")
-    q, r, angle = broadcast(t_max=q, t_min=r, angle=as_finite(angle, "angle"))
+    q, r, angle = broadcast(t_max=q, t_min=r, angle=as_turn(angle, "angle", "axis angles"))
     M = np.zeros(q.shape + (4, 4))
     M[..., 0, 0] = M[..., 1, 1] = (q + r) / 2
     M[..., 0, 1] = M[..., 1, 0] = (q - r) / 2
@@ -257,7 +257,7 @@ def linear_polarizer(angle=0.0, extinction_ratio=0.0) -> np.ndarray:
     Parameters
     ----------
     angle : array_like
-        Transmission axis, from s towards p [rad].
+        Transmission axis, from s towards p [rad], in [-2 pi, 2 pi] (degrees are refused).
     extinction_ratio : array_like
         ``t_min / t_max``, in [0, 1] (0: ideal polarizer).
 
@@ -284,14 +284,15 @@ def linear_retarder(retardance, fast_axis=0.0) -> np.ndarray:
     retardance : array_like
         Retardance :math:`\delta` [rad].
     fast_axis : array_like
-        Fast-axis angle :math:`\theta`, from s towards p [rad].
+        Fast-axis angle :math:`\theta`, from s towards p [rad], in [-2 pi, 2 pi] (degrees are refused).
 
     Returns
     -------
     M : ndarray, shape ``(..., 4, 4)``.
     """
     d, t = broadcast(
-        retardance=as_finite(retardance, "retardance"), fast_axis=as_finite(fast_axis, "fast_axis")
+        retardance=as_finite(retardance, "retardance"),
+        fast_axis=as_turn(fast_axis, "fast_axis", "fast-axis angles"),
     )
     M = np.zeros(d.shape + (4, 4))
     M[..., 0, 0] = M[..., 1, 1] = 1
@@ -307,14 +308,14 @@ def rotator(rotation_angle) -> np.ndarray:
     Parameters
     ----------
     rotation_angle : array_like
-        Rotation angle, towards p [rad].
+        Rotation angle, towards p [rad], in [-2 pi, 2 pi] (degrees are refused).
 
     Returns
     -------
     ndarray, shape (..., 4, 4)
         Mueller matrix of the rotator.
     """
-    return _frame_rotation(-as_finite(rotation_angle, "rotation_angle"))
+    return _frame_rotation(-as_turn(rotation_angle, "rotation_angle", "rotation angles"))
 
 
 def depolarizer(a=0.0) -> np.ndarray:

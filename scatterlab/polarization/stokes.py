@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_finite
+from scatterlab._checks import as_finite, as_turn
 
 __all__ = [
     "jones_to_stokes",
@@ -74,7 +74,7 @@ def stokes_vector(intensity=1.0, dop=0.0, aop=0.0, ellipticity=0.0) -> np.ndarra
     ----------
     intensity : array_like, ``>= 0``
     dop : array_like in ``[0, 1]``
-    aop : array_like [rad], from the s axis.
+    aop : array_like [rad], from the s axis, in [-2 pi, 2 pi] (degrees are refused).
     ellipticity : array_like [rad] in ``[-pi/4, pi/4]`` (positive: right-handed).
 
     Returns
@@ -83,7 +83,7 @@ def stokes_vector(intensity=1.0, dop=0.0, aop=0.0, ellipticity=0.0) -> np.ndarra
     """
     I = as_finite(intensity, "intensity")
     p = as_finite(dop, "dop")
-    psi = as_finite(aop, "aop")
+    psi = as_turn(aop, "aop", "angles of polarization")
     chi = as_finite(ellipticity, "ellipticity")
     if np.any(I < 0):
         raise ValueError("intensity must be >= 0")
@@ -175,7 +175,7 @@ def signed_dolp(S, aop=0.0, *, min_intensity: float = 0.0) -> np.ndarray:
     Parameters
     ----------
     S : array_like, shape ``(..., 4)`` or ``(..., 3)``, Stokes axis last.
-    aop : array_like [rad], broadcasting with ``S[..., 0]``.
+    aop : array_like [rad], finite, in [-2 pi, 2 pi] (degrees are refused); broadcasting with ``S[..., 0]``.
     min_intensity : float, ``>= 0``
 
     Returns
@@ -183,9 +183,7 @@ def signed_dolp(S, aop=0.0, *, min_intensity: float = 0.0) -> np.ndarray:
     ndarray, shape ``(...)``, dimensionless, in ``[-1, 1]`` for physical Stokes vectors.
     """
     S = _linear(S)
-    a2 = 2 * np.asarray(aop, float)
-    if not np.all(np.isfinite(a2)):
-        raise ValueError("aop must be finite [rad]")
+    a2 = 2 * as_turn(aop, "aop", "angles of polarization")
     proj = S[..., 1] * np.cos(a2) + S[..., 2] * np.sin(a2)
     return _ratio(proj, S[..., 0], _min_intensity(min_intensity))
 
