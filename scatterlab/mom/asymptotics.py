@@ -84,7 +84,9 @@ def spm1_coefficient(theta_i, theta_s, k, spectrum, polarization: str = "s", eta
     theta_i, theta_s : float or array [rad]
     k : float [rad/m] -- wavenumber above the surface (finite, > 0).
     spectrum : callable K -> W(K) [m^3], or a tuple (sigma_h, corr_length) [m] of a Gaussian
-        correlation (:func:`scatterlab.mom.surfaces.gaussian_spectrum`).
+        correlation (:func:`scatterlab.mom.surfaces.gaussian_spectrum`), exactly two entries. The
+        callable receives the array K = k (sin theta_s - sin theta_i) [rad/m] and must return
+        finite values >= 0 (a power spectrum) of K's shape or one that broadcasts to it.
     polarization : "s" or "p"
     eta : complex, optional -- index ``n - 1j*kappa``, checked as in :func:`~scatterlab.mom.solve`;
         None is a perfect conductor.
@@ -97,22 +99,62 @@ def spm1_coefficient(theta_i, theta_s, k, spectrum, polarization: str = "s", eta
     ------
     ValueError
         If ``k`` is not finite and > 0, ``theta_i`` or ``theta_s`` is not finite within [-pi/2, pi/2], a
-        Gaussian spectrum's ``sigma_h`` is negative or ``corr_length`` not > 0, or ``eta`` is not a passive
-        index (see ``solve``).
+        Gaussian spectrum's ``sigma_h`` is negative or ``corr_length`` not > 0, the tuple does not hold
+        exactly two entries, ``spectrum`` is neither a tuple nor callable or its values are not finite and
+        >= 0 (or do not broadcast to K), or ``eta`` is not a passive index (see ``solve``).
     """
     theta_i = as_angle(theta_i, "theta_i", -np.pi / 2, np.pi / 2)
     theta_s = as_angle(theta_s, "theta_s", -np.pi / 2, np.pi / 2)
     if isinstance(spectrum, tuple):
+        if len(spectrum) != 2:
+            raise ValueError(
+                "spectrum must be a callable K -> W(K) or a tuple (sigma_h, corr_length) of exactly "
+                f"two entries, got a tuple of {len(spectrum)}"
+            )
         sigma_h = float(as_positive(spectrum[0], "sigma_h", allow_zero=True))
         ell = float(as_positive(spectrum[1], "corr_length"))
 
         def spectrum(q):
             return gaussian_spectrum(q, sigma_h, ell)
 
+    elif not callable(spectrum):
+        raise ValueError(
+            "spectrum must be a callable K -> W(K) or a tuple (sigma_h, corr_length), got "
+            f"{type(spectrum).__name__}"
+        )
     k = as_positive(k, "k")
     K = k * (np.sin(theta_s) - np.sin(theta_i))
     alpha = spm1_alpha(theta_i, theta_s, polarization, eta)
-    return 4 * k**3 * np.cos(theta_i) * np.cos(theta_s) ** 2 * np.abs(alpha) ** 2 * spectrum(K)
+    W = _spectrum_values(spectrum, K)
+    return 4 * k**3 * np.cos(theta_i) * np.cos(theta_s) ** 2 * np.abs(alpha) ** 2 * W
+
+
+def _spectrum_values(spectrum, K):
+    """``spectrum(K)`` checked: real, finite and >= 0, broadcast to K's shape."""
+    values = spectrum(K)
+    W = np.asarray(values)
+    if W.dtype.kind not in "iuf":  # complex, strings, objects: not a power spectrum
+        raise ValueError(
+            f"spectrum(K) must return real numbers (a power spectrum W(K) [m^3]), got {values!r}"
+        )
+    W = W.astype(float)
+    try:
+        W = np.broadcast_to(W, np.shape(K))
+    except ValueError as exc:
+        raise ValueError(
+            f"spectrum(K) must return an array of K's shape {np.shape(K)} (or one that broadcasts "
+            f"to it), got shape {W.shape}"
+        ) from exc
+    if not np.all(np.isfinite(W)):
+        raise ValueError(
+            "spectrum(K) must return finite values (no NaN or inf), got a non-finite one"
+        )
+    if np.any(W < 0):
+        raise ValueError(
+            f"spectrum(K) must return values >= 0 (a power spectrum W(K) [m^3]), got "
+            f"{float(W.min()):g}"
+        )
+    return W
 
 
 def periodogram(x, y, incidence, k, theta_s):

@@ -50,7 +50,7 @@ from functools import partial
 import numpy as np
 from scipy import linalg, special
 
-from scatterlab._checks import as_finite, as_positive
+from scatterlab._checks import as_finite, as_positive, as_scalar
 from scatterlab.mom.hankel import hankel2_real
 
 __all__ = [
@@ -334,7 +334,7 @@ _KERNELS = {
 }
 
 
-def impedance_matrix(c: Contour, k: float) -> np.ndarray:
+def impedance_matrix(c: Contour, k: float, *, min_points_per_wavelength: float = 5.0) -> np.ndarray:
     """The N x N MoM matrix A (module docstring), complex128.
 
     Parameters
@@ -342,7 +342,12 @@ def impedance_matrix(c: Contour, k: float) -> np.ndarray:
     c : Contour
         The discretised contour (N pulses).
     k : float
-        Wavenumber [rad/m].
+        Wavenumber [rad/m]: one finite number > 0 that samples the contour with at least
+        ``min_points_per_wavelength`` pulses per wavelength ``2 pi / k`` (the check of
+        :func:`solve_tm`, :func:`check_sampling`).
+    min_points_per_wavelength : float
+        Sampling below this (longest pulse) raises ValueError; a median pulse longer than 1/8 of
+        the wavelength warns (default 5, as :func:`solve_tm`).
 
     Returns
     -------
@@ -352,8 +357,16 @@ def impedance_matrix(c: Contour, k: float) -> np.ndarray:
     Raises
     ------
     ValueError
-        ``k`` not finite and > 0.
+        ``k`` not one finite number > 0, or too large for the sampling of ``c``.
+
+    Warns
+    -----
+    UserWarning
+        Fewer than 8 points per wavelength (median pulse).
     """
+    k = as_scalar(k, "k", 0.0, open_lo=True, unit=" [rad/m]")
+    mppw = as_scalar(min_points_per_wavelength, "min_points_per_wavelength", 0.0, open_lo=True)
+    check_sampling(c, 2 * np.pi / k, mppw, f"(k = {k:g} rad/m)")
     return _impedance_matrix(c, k)
 
 
@@ -646,6 +659,28 @@ def check_sampling(c: Contour, wavelength: float, min_ppw: float, where: str = "
         )
 
 
+def check_incidence_list(incidence) -> list:
+    """``incidence`` as a list: one incident wave, or a non-empty list or tuple of them.
+
+    Parameters
+    ----------
+    incidence : PlaneWave, TaperedWave or a non-empty list or tuple of them
+        The incidences of a solve.
+
+    Returns
+    -------
+    list
+        The incidences.
+    """
+    incs = list(incidence) if isinstance(incidence, (list, tuple)) else [incidence]
+    if not incs:
+        raise ValueError(
+            "incidence must be a PlaneWave, a TaperedWave or a non-empty list of them, got an "
+            "empty list"
+        )
+    return incs
+
+
 def check_incidences(incs, c: Contour, k: float) -> None:
     """Validate each incidence against the contour (taper width and position, angle from above).
 
@@ -689,7 +724,7 @@ def solve_tm(
     ----------
     x, y : array (N,) [m] -- contour points (open profile with increasing x, or closed counter-clockwise).
     wavelength : float [m]
-    incidence : PlaneWave, TaperedWave or a list of them (multiple right-hand sides).
+    incidence : PlaneWave, TaperedWave or a non-empty list of them (multiple right-hand sides).
     closed : bool
     solver : "lu" (LAPACK through scipy, factorised once), "fb" (block forward-backward, Holliday et al.,
         with fallback to LU when it diverges or stalls; see :func:`scatterlab.mom.solvers.forward_backward`)
@@ -714,7 +749,7 @@ def solve_tm(
     k = 2 * np.pi / wavelength
     c = contour(x, y, closed)
     check_sampling(c, wavelength, min_points_per_wavelength)
-    incs = list(incidence) if isinstance(incidence, (list, tuple)) else [incidence]
+    incs = check_incidence_list(incidence)
     check_incidences(incs, c, k)
     V = np.stack([inc.field(c.x, c.y, k) for inc in incs], axis=1)
     single = not isinstance(incidence, (list, tuple))
@@ -726,7 +761,7 @@ def solve_tm(
             return sol
         solver = "lu"
     t0 = time.perf_counter()
-    A = impedance_matrix(c, k)
+    A = _impedance_matrix(c, k)  # sampling checked above, with the caller's floor
     t_fill = time.perf_counter() - t0
     t0 = time.perf_counter()
     used = solver

@@ -68,7 +68,14 @@ import numpy as np
 from scipy import linalg
 
 from scatterlab._checks import as_index, as_positive
-from scatterlab.mom.efie import Solution, check_incidences, check_sampling, contour, solve_tm
+from scatterlab.mom.efie import (
+    Solution,
+    check_incidence_list,
+    check_incidences,
+    check_sampling,
+    contour,
+    solve_tm,
+)
 from scatterlab.mom.incidence import TaperedWave
 from scatterlab.mom.kernels import arclength_contour, hankel2, layer_matrices
 
@@ -148,7 +155,8 @@ def solve(
     x, y : array (N,) [m] -- contour points (open profile with increasing x, or closed
         counter-clockwise).
     wavelength : float [m] -- in medium 1 (vacuum).
-    incidence : PlaneWave, TaperedWave or a list of them (one factorisation for all).
+    incidence : PlaneWave, TaperedWave or a non-empty list of them (one factorisation
+        for all).
     polarization : "s" (E along z, Eq. 178) or "p" (H along z).
     eta : complex, optional -- index n - j kappa of the medium below / inside; None is a perfect
         conductor.
@@ -197,7 +205,7 @@ def solve(
     k = 2 * np.pi / wavelength
     c = arclength_contour(contour(x, y, closed))
     _check_media(c, wavelength, eta, method, min_points_per_wavelength)
-    incs = list(incidence) if isinstance(incidence, (list, tuple)) else [incidence]
+    incs = check_incidence_list(incidence)
     check_incidences(incs, c, k)
     U, psi, res, timings, used = _fill_and_solve(
         c, k, incs, (polarization, eta, method, band), tuple(controls.values())

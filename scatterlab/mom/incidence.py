@@ -29,6 +29,9 @@ from scatterlab._checks import as_positive
 
 __all__ = ["PlaneWave", "TaperedWave"]
 
+G_MAX = 1e300  # widest taper [m]: g sqrt(pi/2) (the incident power) stays finite
+KGC_MAX = 1e150  # largest k g cos(theta): its square (the taper's correction) stays finite
+
 
 def _check_real(value, name: str) -> None:
     """ValueError naming ``name`` unless ``value`` is one real number (not a string or bool)."""
@@ -78,7 +81,21 @@ class PlaneWave:
 
 @dataclass(frozen=True)
 class TaperedWave:
-    """Thorsos's tapered plane wave: incidence ``theta`` [rad], taper half-width ``g`` [m], centre ``x0`` [m]."""
+    """Thorsos's tapered plane wave: incidence ``theta`` [rad], taper half-width ``g`` [m], centre ``x0`` [m].
+
+    Parameters
+    ----------
+    theta : float
+        Incidence angle in (-pi/2, pi/2) [rad] from the vertical.
+    g : float
+        Taper half-width [m], finite, > 0 and at most 1e300 (:data:`G_MAX`); :meth:`check` and
+        :meth:`incident_power` also need ``k g cos(theta) <= 1e150`` (:data:`KGC_MAX`, about
+        1.6e149 wavelengths), beyond which the taper's correction term overflows.
+    x0 : float
+        Taper centre [m], finite.
+    correction : bool
+        Thorsos's first-order correction (module docstring); False is the plain Gaussian window.
+    """
 
     theta: float
     g: float
@@ -93,8 +110,10 @@ class TaperedWave:
                 f"theta must be in (-pi/2, pi/2) rad (-90, 90 deg) for a tapered wave, got "
                 f"{self.theta!r}"
             )
-        if not (np.isfinite(self.g) and self.g > 0):
-            raise ValueError(f"g (taper width) must be finite and > 0 [m], got {self.g!r}")
+        if not (np.isfinite(self.g) and 0 < self.g <= G_MAX):
+            raise ValueError(
+                f"g (taper width) must be finite, > 0 and <= {G_MAX:g} [m], got {self.g!r}"
+            )
         if not np.isfinite(self.x0):
             raise ValueError(
                 f"x0 (taper centre) must be a finite position [m] on the surface, got {self.x0!r}"
@@ -104,7 +123,7 @@ class TaperedWave:
         """Raise ValueError when the taper is too narrow for the angle, the surface too short for the taper,
         or (``extent = (x_first, x_last)`` of the pulse centres) the taper centre ``x0`` off the surface or
         closer than 1.9 g to one of its ends."""
-        kgc = k * self.g * np.cos(self.theta)
+        kgc = self._kgc(k)
         if kgc < 10:
             g_min = 10 / (k * np.cos(self.theta))
             raise ValueError(
@@ -144,6 +163,19 @@ class TaperedWave:
                     f"[{lo + 1.9 * self.g:.6g}, {hi - 1.9 * self.g:.6g}] m)"
                 )
 
+    def _kgc(self, k) -> float:
+        """``k g cos(theta)``, a ValueError naming g beyond :data:`KGC_MAX` (its square overflows)."""
+        k = float(as_positive(k, "k"))
+        c = float(np.cos(self.theta))
+        kgc = k * float(self.g) * c  # Python floats: inf on overflow, never a warning
+        if not kgc <= KGC_MAX:
+            raise ValueError(
+                f"g (taper width) = {self.g:.4g} m is too wide for k = {k:.4g} rad/m: k g cos(theta) "
+                f"= {kgc:.3g} must be <= {KGC_MAX:g} (g <= {KGC_MAX / (k * c):.4g} m, in the "
+                "wavelength's unit), beyond which the taper's correction overflows"
+            )
+        return kgc
+
     def _parts(self, x, y, k):
         t = np.tan(self.theta)
         c = np.cos(self.theta)
@@ -169,9 +201,11 @@ class TaperedWave:
 
     def incident_power(self, k: float) -> float:
         """Power through a horizontal line, g sqrt(pi/2) cos(theta) [1 - (1 + 2 tan^2)/(2 k^2 g^2 cos^2)]."""
-        k = float(as_positive(k, "k"))
+        kgc = self._kgc(k)
+        if kgc < 0.5:  # corr >= 2 below: check raises (too narrow), as it did for corr >= 1
+            self.check(k)  # before (k g cos)^2 underflows to 0
         c, t = np.cos(self.theta), np.tan(self.theta)
-        corr = (1 + 2 * t * t) / (2 * (k * self.g * c) ** 2) if self.correction else 0.0
+        corr = (1 + 2 * t * t) / (2 * kgc**2) if self.correction else 0.0
         if corr >= 1:
             # the expansion's correction exceeds its leading term: no finite positive power
             self.check(k)

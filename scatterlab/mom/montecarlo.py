@@ -172,6 +172,10 @@ def _load_checkpoint(path, settings, digests):
 def _check_angles(theta_i, theta_s):
     theta_i = np.atleast_1d(np.asarray(theta_i, float))
     theta_s = np.atleast_1d(np.asarray(theta_s, float))
+    if theta_i.size == 0:
+        raise ValueError(
+            "theta_i must hold at least one incidence angle in (-pi/2, pi/2) rad, got an empty list"
+        )
     if not np.all(np.isfinite(theta_i)) or np.any(np.abs(theta_i) >= np.pi / 2):
         raise ValueError("theta_i must be finite incidence angles in (-pi/2, pi/2) rad")
     if not np.all(np.isfinite(theta_s)) or np.any(np.abs(theta_s) > np.pi / 2):
@@ -256,7 +260,8 @@ def incoherent_scattering(
     wavelength : float
         Wavelength [m].
     theta_i : array_like, shape (I,)
-        Incidence angles in (-pi/2, pi/2) [rad], all solved with one factorisation per partition.
+        Incidence angles in (-pi/2, pi/2) [rad], at least one, all solved with one factorisation
+        per partition.
     theta_s : array_like, shape (S,)
         Scattering angles in [-pi/2, pi/2] from the vertical [rad], specular at theta_i.
     partitions : int
