@@ -20,6 +20,7 @@ __all__ = [
     "check_starts",
     "as_scalar",
     "as_square_matrix",
+    "as_image_shape",
 ]
 
 
@@ -252,6 +253,29 @@ def as_count(value, name: str, lo: int = 0, unit: str = "") -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
         raise ValueError(f"{name} must be an integer >= {lo}{unit}, got {value!r}")
     return int(value)
+
+
+def as_image_shape(value, name: str) -> tuple[int, int]:
+    """``value`` as an image shape ``(H, W)``: two integers >= 1 [pixels].
+
+    Parameters
+    ----------
+    value : sequence of two int
+        The shape.
+    name : str
+        The argument's name in the message.
+
+    Returns
+    -------
+    (H, W) : tuple of int
+    """
+    try:
+        H, W = value
+        return as_count(H, "H", 1), as_count(W, "W", 1)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(
+            f"{name} must be (H, W), two integers >= 1 [pixels], got {value!r}"
+        ) from exc
 
 
 def broadcast(**arrays) -> list[np.ndarray]:

@@ -30,6 +30,7 @@ this size and turbulence being the limit (the example is small so that the tests
 
 from __future__ import annotations
 
+import contextlib
 import json
 import time
 import warnings
@@ -319,34 +320,23 @@ def analyze(
     return _write(folder, ds, settings, images, layout, maps, estimates, seconds, missing, said)
 
 
-class _warnings_into:
+@contextlib.contextmanager
+def _warnings_into(said: list, stage: str):
     """Collect the ``UserWarning`` s a stage gives into ``said`` as ``(stage, message)``, each message
     once (a fit repeated per re-simulation gives the same warning each time), and show each once on
     stderr: the report prints them beside its numbers. Other warnings pass through unchanged."""
-
-    def __init__(self, said: list, stage: str):
-        self.said, self.stage = said, stage
-        self._catch = warnings.catch_warnings(record=True)
-
-    def __enter__(self):
-        self._caught = self._catch.__enter__()
+    with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
-        return self
-
-    def __exit__(self, *exc):
-        self._catch.__exit__(*exc)
-        known = {m for _, m in self.said}
-        for w in self._caught:
-            message = str(w.message)
-            if not issubclass(w.category, UserWarning):
-                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-            elif message not in known:
-                known.add(message)
-                self.said.append((self.stage, message))
-                warnings.warn_explicit(
-                    f"{message} (in report.md)", w.category, w.filename, w.lineno
-                )
-        return False
+        yield
+    known = {m for _, m in said}
+    for w in caught:
+        message = str(w.message)
+        if not issubclass(w.category, UserWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        elif message not in known:
+            known.add(message)
+            said.append((stage, message))
+            warnings.warn_explicit(f"{message} (in report.md)", w.category, w.filename, w.lineno)
 
 
 def _mid(thetas) -> int:
@@ -651,8 +641,7 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    from scatterlab.characterization.metrics import at_fit_bound
-    from scatterlab.characterization.report import AT_BOUND_COLOUR
+    from scatterlab.characterization.report import AT_BOUND_COLOUR, mark_fit_bound
     from scatterlab.plotting import headless_pyplot
 
     plt = headless_pyplot()
@@ -698,16 +687,7 @@ def _maps_figure(path, images, layout, maps, ds, save_png):
                 img, cmap=cmap, vmin=lim[0] if lim else None, vmax=lim[1] if lim else None
             )
             if title in ("n", "kappa"):
-                # a fit that stopped on its box's edge is the bound, not an estimate: its own colour,
-                # as in characterize's figure (report.AT_BOUND_COLOUR, metrics.at_fit_bound)
-                on = at_fit_bound(maps.n, maps.kappa) & np.isfinite(img)
-                ax.imshow(
-                    np.ma.masked_array(np.ones(on.shape), ~on),
-                    cmap=ListedColormap([AT_BOUND_COLOUR]),
-                    vmin=0,
-                    vmax=1,
-                    interpolation="nearest",
-                )
+                on = mark_fit_bound(ax, maps, img)  # as in characterize's figure
                 if on.any() and title == "kappa":
                     ax.legend(
                         handles=[Patch(color=AT_BOUND_COLOUR, label="fit on its box's edge")],

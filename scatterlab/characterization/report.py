@@ -107,6 +107,39 @@ def save_png(fig, path: Path) -> None:
 _versions, _save_png = versions, save_png  # the former private names
 
 
+def mark_fit_bound(ax, maps, values) -> np.ndarray:
+    """Paint the pixels whose per-pixel fit stopped on its box's edge in :data:`AT_BOUND_COLOUR`
+    over a panel of the n or kappa map: there the value is the bound, not an estimate.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+        The panel.
+    maps : PixelMaps
+        The per-pixel fits (``n``, ``kappa``, arrays (H, W)).
+    values : ndarray, shape (H, W)
+        The panel's image; NaN pixels (not measured) are left blank.
+
+    Returns
+    -------
+    ndarray of bool, shape (H, W)
+        The pixels marked.
+    """
+    from matplotlib.colors import ListedColormap
+
+    from scatterlab.characterization.metrics import at_fit_bound
+
+    on = at_fit_bound(maps.n, maps.kappa) & np.isfinite(values)
+    ax.imshow(
+        np.ma.masked_array(np.ones(on.shape), ~on),
+        cmap=ListedColormap([AT_BOUND_COLOUR]),
+        vmin=0,
+        vmax=1,
+        interpolation="nearest",
+    )
+    return on
+
+
 def _title(key: str) -> str:
     if key == "truth":
         return "truth (object)"
@@ -138,7 +171,6 @@ def plate_figure(out, result, cfg) -> Path:
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    from scatterlab.characterization.metrics import at_fit_bound
     from scatterlab.plotting import headless_pyplot
 
     plt = headless_pyplot()
@@ -208,15 +240,7 @@ def plate_figure(out, result, cfg) -> Path:
                 )
                 im = ax.imshow(values, vmin=0, vmax=index_top[row], cmap="magma")
                 if maps is not None:
-                    # a fit that stopped on its box's edge is the bound, not an estimate: its own colour
-                    on = at_fit_bound(maps.n, maps.kappa) & np.isfinite(values)
-                    ax.imshow(
-                        np.ma.masked_array(np.ones(on.shape), ~on),
-                        cmap=ListedColormap([AT_BOUND_COLOUR]),
-                        vmin=0,
-                        vmax=1,
-                        interpolation="nearest",
-                    )
+                    mark_fit_bound(ax, maps, values)
             ax.set_xticks([])
             ax.set_yticks([])
             if j == len(columns) - 1 and row != "classes":

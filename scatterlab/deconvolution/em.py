@@ -70,7 +70,7 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 import scipy.fft as sfft
 
-from scatterlab._checks import as_count, as_positive, as_turn
+from scatterlab._checks import as_count, as_image_shape, as_positive, as_turn
 from scatterlab.deconvolution.priors import _dolp_update, _prior_set, map_objective
 from scatterlab.deconvolution.psf_update import PupilPhasePSF, gerchberg_saxton, resample_psf
 from scatterlab.polarization import dolp as stokes_dolp
@@ -1161,12 +1161,7 @@ def object_grid(data_shape, psf_radius=None, boundary: str = "reeves", pad=None)
     tuple of int
         ``(Hp, Wp)``: ``(H + 2 pad, W + 2 pad)`` for ``"reeves"``, else ``(H, W)``.
     """
-    bad_shape = f"data_shape must be (H, W), two integers >= 1 [pixels], got {data_shape!r}"
-    try:
-        H, W = data_shape
-        H, W = as_count(H, "H", 1), as_count(W, "W", 1)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(bad_shape) from exc
+    H, W = as_image_shape(data_shape, "data_shape")
     if pad is not None:
         pad = as_count(pad, "pad", 0, " [pixels]")
     if psf_radius is None:

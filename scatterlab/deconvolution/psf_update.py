@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_count, as_rng
+from scatterlab._checks import as_count, as_image_shape, as_rng
 
 __all__ = ["initial_psf", "gerchberg_saxton", "psf_distance", "resample_psf"]
 
@@ -90,12 +90,7 @@ def resample_psf(h, shape) -> np.ndarray:
             "h must be finite and >= 0 (a PSF: light is never negative; clip round-off with "
             "numpy.clip(h, 0, None))"
         )
-    bad_shape = f"shape must be (H, W), two integers >= 1 [pixels], got {shape!r}"
-    try:
-        H, W = shape
-        H, W = as_count(H, "H", 1), as_count(W, "W", 1)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(bad_shape) from exc
+    H, W = as_image_shape(shape, "shape")
     out = np.zeros((H, W))
     Hs, Ws = h.shape
     ch, cw = min(H, Hs), min(W, Ws)

@@ -449,16 +449,14 @@ def test_a_calibrated_region_gets_its_measured_covariance_and_no_inferred_noise(
     np.testing.assert_allclose(np.sqrt(np.diag(fixed["covariance"][0])), np.hypot(err, NOISE_FLOOR))
 
 
-def test_a_metal_the_data_do_not_separate_is_flagged_and_its_truth_is_in_the_joint_region():
-    """Copper at 30-60 deg: its DOLP fixes about Re(1/eta), so the posterior runs along a ridge and the
-    region's note says that the marginal intervals follow the prior; the exact data put the truth at the
-    best fit, inside the joint likelihood-ratio region (Delta chi^2 ~ 0). A paint in the same call is
-    determined and gets no such note."""
-    from scatterlab.characterization.estimation import RegionData, region_posteriors
+def copper_and_paint():
+    """Noise-free region means at 30-60 deg of copper-like 0.61 - j10.4 (a ridge of equal DOLP) and a
+    paint 1.5 - j0.1, with errors 3e-3 and 2e-3: (theta (4,) [rad], [metal, paint] RegionData)."""
+    from scatterlab.characterization.estimation import RegionData
     from scatterlab.inversion import model_dolp
 
     th = np.radians([30.0, 40.0, 50.0, 60.0])
-    regions = [
+    return th, [
         RegionData(
             name, np.asarray(model_dolp(n, k, 0.3, th, th), float), e, e, np.zeros(4), 100, (n, k)
         )
@@ -467,6 +465,16 @@ def test_a_metal_the_data_do_not_separate_is_flagged_and_its_truth_is_in_the_joi
             ("paint", 1.5, 0.1, np.full(4, 2e-3)),
         )
     ]
+
+
+def test_a_metal_the_data_do_not_separate_is_flagged_and_its_truth_is_in_the_joint_region():
+    """Copper at 30-60 deg: its DOLP fixes about Re(1/eta), so the posterior runs along a ridge and the
+    region's note says that the marginal intervals follow the prior; the exact data put the truth at the
+    best fit, inside the joint likelihood-ratio region (Delta chi^2 ~ 0). A paint in the same call is
+    determined and gets no such note."""
+    from scatterlab.characterization.estimation import region_posteriors
+
+    th, regions = copper_and_paint()
     metal, paint = region_posteriors(regions, th, 0.3, np.random.default_rng(3), n_steps=400)
     assert min(metal.parameters[q]["contraction"] for q in ("n", "kappa")) < 0.9
     assert any("only partly" in w for w in metal.warnings), metal.warnings
@@ -789,19 +797,10 @@ def test_a_region_whose_fixed_chain_did_not_converge_is_run_until_it_does():
     """400 steps are too few for these two posteriors (the sampler alone flags both); the region
     posteriors run them again, up to EXTEND x as long, and return converged chains without the
     "did not converge" note."""
-    from scatterlab.characterization.estimation import RegionData, region_posteriors
-    from scatterlab.inversion import model_dolp, sample_posteriors
+    from scatterlab.characterization.estimation import region_posteriors
+    from scatterlab.inversion import sample_posteriors
 
-    th = np.radians([30.0, 40.0, 50.0, 60.0])
-    regions = [
-        RegionData(
-            name, np.asarray(model_dolp(n, k, 0.3, th, th), float), e, e, np.zeros(4), 100, (n, k)
-        )
-        for name, n, k, e in (
-            ("metal", 0.61, 10.4, np.full(4, 3e-3)),
-            ("paint", 1.5, 0.1, np.full(4, 2e-3)),
-        )
-    ]
+    th, regions = copper_and_paint()
     with pytest.warns(Warning):
         short = sample_posteriors(
             np.stack([r.mean for r in regions]),
