@@ -148,14 +148,16 @@ def specular_lobe_1d(theta_i, theta_s, sigma, shadowing: str = "torrance-sparrow
 
     Parameters
     ----------
-    theta_i : array_like [rad] in ``[0, pi/2)``
+    theta_i : array_like [rad] in ``[0, pi/2]``
     theta_s : array_like [rad] in ``[-pi/2, pi/2]``, signed.
     sigma : array_like -- rms slope in ``[1e-4, 5]``.
     shadowing : {"torrance-sparrow", "smith", "none"}
 
     Returns
     -------
-    ndarray [1/rad], broadcast shape, ``>= 0`` (0 at grazing incidence).
+    ndarray [1/rad], broadcast shape, ``>= 0``, finite. At ``theta_i = numpy.pi/2`` with shadowing it
+    is the grazing limit (``G/cos(theta_i)`` is finite on the lit facets; :func:`dhr_pec_1d`), which
+    integrates to 1 over ``theta_s``; without shadowing it follows the model's divergence.
     """
     _check_shadowing(shadowing)
     ti, ts = _angles(theta_i, theta_s)
@@ -237,7 +239,10 @@ def inplane_coefficients(
     Parameters
     ----------
     eta : complex array_like (``n - 1j*kappa``) or ``"pec"``
-    theta_i : array_like [rad] in ``[0, pi/2)``
+    theta_i : array_like [rad] in ``[0, pi/2]``; exactly ``pi/2`` (grazing) with shadowing only, where
+        the lobe is its limit (:func:`dhr_pec_1d`: a PEC's integrates to 1) and the diffuse term 0.
+        Without shadowing the model diverges there (``rho_1 ~ sigma tan(theta_i)``), so
+        ``shadowing="none"`` needs ``theta_i < pi/2``.
     theta_s : array_like [rad] in ``[-pi/2, pi/2]``, signed (specular at ``theta_s = theta_i``).
     sigma : array_like -- rms slope ``sqrt(2) sigma_h / l`` in ``[1e-4, 5]``.
     shadowing : {"torrance-sparrow", "smith", "none"}
@@ -252,8 +257,11 @@ def inplane_coefficients(
     if diffuse not in ("hyde", "none"):
         raise ValueError(f"diffuse must be 'hyde' or 'none', got {diffuse!r}")
     ti, ts = _angles(theta_i, theta_s)
-    if np.any(ti >= np.pi / 2):
-        raise ValueError("theta_i must be below pi/2 rad")
+    if shadowing == "none" and np.any(ti >= np.pi / 2):
+        raise ValueError(
+            "theta_i must be below pi/2 rad with shadowing='none' (the unshadowed facet model "
+            "diverges at grazing incidence); use 'torrance-sparrow' or 'smith' for theta_i = pi/2"
+        )
     sig = _sigma(sigma)
     beta = np.abs(ti + ts) / 2
     if isinstance(eta, str):

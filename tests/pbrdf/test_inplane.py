@@ -148,3 +148,31 @@ def test_unshadowed_dhr_at_grazing_follows_its_divergence():
     assert np.isfinite(at)
     assert at == pytest.approx(0.5 + sigma * np.tan(np.pi / 2) / np.sqrt(2 * np.pi), rel=1e-12)
     assert at == pytest.approx(dhr_beckmann(np.pi / 2, sigma, "none"), rel=1e-6)
+
+
+@pytest.mark.parametrize("shadowing", ["torrance-sparrow", "smith"])
+def test_coefficients_at_exactly_grazing_incidence_are_the_limit(shadowing):
+    """theta_i = pi/2 exactly: the lobe is finite, a PEC's integrates to the limit 1 (dhr_pec_1d's
+    docstring), the diffuse term vanishes, a metal scatters less than the PEC, and the coefficients
+    join those at 89.999 deg continuously."""
+    ts = np.linspace(-np.pi / 2, np.pi / 2, 400001)
+    sigma = 0.3
+    cs, cp = inplane_coefficients("pec", np.pi / 2, ts, sigma, shadowing=shadowing)
+    assert np.all(np.isfinite(cs)) and np.all(cs >= 0)
+    assert np.trapezoid(cs, ts) == pytest.approx(1.0, abs=1e-4)
+    for eta in (GLASS, IRON, AL):
+        ms, mp = inplane_coefficients(eta, np.pi / 2, ts, sigma, shadowing=shadowing)
+        assert np.all(np.isfinite(ms)) and np.all(np.isfinite(mp))
+        assert 0 < np.trapezoid(mp, ts) <= np.trapezoid(ms, ts) <= 1 + 1e-4
+        near_s, _ = inplane_coefficients(
+            eta, np.radians(89.999), ts, sigma, shadowing=shadowing
+        )
+        # O(gap) approach: 1.7e-5 rad from grazing, the L1 change is a few times that
+        assert np.trapezoid(np.abs(near_s - ms), ts) < 1e-3
+    d = dolp_1d(IRON, np.pi / 2, np.radians([-30.0, 0.0, 45.0]), sigma, shadowing=shadowing)
+    assert np.all(np.isfinite(d)) and np.all((d >= 0) & (d <= 1))
+
+
+def test_unshadowed_coefficients_refuse_exactly_grazing_incidence_by_name():
+    with pytest.raises(ValueError, match="theta_i.*shadowing"):
+        inplane_coefficients(IRON, np.pi / 2, 0.0, 0.3, shadowing="none")
