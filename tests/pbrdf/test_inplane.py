@@ -164,9 +164,7 @@ def test_coefficients_at_exactly_grazing_incidence_are_the_limit(shadowing):
         ms, mp = inplane_coefficients(eta, np.pi / 2, ts, sigma, shadowing=shadowing)
         assert np.all(np.isfinite(ms)) and np.all(np.isfinite(mp))
         assert 0 < np.trapezoid(mp, ts) <= np.trapezoid(ms, ts) <= 1 + 1e-4
-        near_s, _ = inplane_coefficients(
-            eta, np.radians(89.999), ts, sigma, shadowing=shadowing
-        )
+        near_s, _ = inplane_coefficients(eta, np.radians(89.999), ts, sigma, shadowing=shadowing)
         # O(gap) approach: 1.7e-5 rad from grazing, the L1 change is a few times that
         assert np.trapezoid(np.abs(near_s - ms), ts) < 1e-3
     d = dolp_1d(IRON, np.pi / 2, np.radians([-30.0, 0.0, 45.0]), sigma, shadowing=shadowing)
