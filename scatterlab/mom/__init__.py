@@ -28,7 +28,7 @@ from scatterlab.mom.exact import (
     cylinder_echo_width,
     cylinder_surface_field,
 )
-from scatterlab.mom.formulations import solve
+from scatterlab.mom.formulations import TruncationWarning, solve
 from scatterlab.mom.incidence import PlaneWave, TaperedWave
 from scatterlab.mom.montecarlo import IncoherentResult, incoherent_scattering
 from scatterlab.mom.solvers import forward_backward
@@ -43,6 +43,7 @@ __all__ = [
     "PlaneWave",
     "Solution",
     "TaperedWave",
+    "TruncationWarning",
     "contour",
     "correlation_length_for_slope",
     "cylinder_coefficients",

@@ -79,7 +79,7 @@ from scatterlab.mom.efie import (
 from scatterlab.mom.incidence import TaperedWave
 from scatterlab.mom.kernels import arclength_contour, hankel2, layer_matrices
 
-__all__ = ["edge_field_ratio", "solve"]
+__all__ = ["TruncationWarning", "edge_field_ratio", "solve"]
 
 
 def _linear_solve(A, V, solver, tol, max_iter, block, interleave):
@@ -179,7 +179,7 @@ def solve(
 
     Warns
     -----
-    UserWarning -- p-pol open profile whose ends keep a large field (:func:`edge_field_ratio` >
+    TruncationWarning (a UserWarning) -- p-pol open profile whose ends keep a large field (:func:`edge_field_ratio` >
     2e-3): the scattering coefficient then integrates to less than 1 for a lossless conductor
     (power lost at the truncation, module docstring "Truncated profiles in p"); use a longer
     surface.
@@ -259,21 +259,43 @@ def edge_field_ratio(c, k, incs, psi):
     return out
 
 
+class TruncationWarning(UserWarning):
+    """A p-polarized open profile left a large field at its ends (:func:`edge_field_ratio` above
+    2e-3): power is lost at the truncation."""
+
+
+def truncation_message(ratio: float, theta_deg: float, where: str = "") -> str:
+    """The text of a :class:`TruncationWarning`: the largest edge-field ratio and its incidence.
+
+    Parameters
+    ----------
+    ratio : float -- :func:`edge_field_ratio`, dimensionless.
+    theta_deg : float -- its incidence angle [deg].
+    where : str -- what the ratio is the largest of (e.g. "in 40 of 40 partitions"), or empty.
+
+    Returns
+    -------
+    str
+    """
+    scope = f" {where}" if where else ""
+    return (
+        f"p-polarized open profile: the surface field at the ends of the profile is large{scope}, "
+        f"lambda |H_z(ends)|^2 / P_inc = {ratio:.3g} (theta_i = {theta_deg:.1f} deg): fields "
+        "scattered towards grazing do not vanish on a conductor in p and reach the truncation, where "
+        "power is lost (the integrated scattering coefficient falls short of 1 by about 0.3-1.5 times "
+        "this ratio, and the shortfall falls only as L^-1/2 with the surface length L at a fixed "
+        "taper): use a longer surface for the same g"
+    )
+
+
 def _warn_truncation(c, k, incs, psi):
-    """UserWarning when a p-pol open profile leaves a large field at its ends (power lost there)."""
+    """TruncationWarning when a p-pol open profile leaves a large field at its ends (power lost)."""
     ratio = edge_field_ratio(c, k, incs, psi)
     if np.all(~(ratio > _EDGE_FIELD_WARN)):
         return
     j = int(np.nanargmax(ratio))
     warnings.warn(
-        f"p-polarized open profile: the surface field at the ends of the profile is large, "
-        f"lambda |H_z(ends)|^2 / P_inc = {ratio[j]:.3g} (theta_i = "
-        f"{np.degrees(incs[j].theta):.1f} deg): fields scattered towards grazing do not vanish on "
-        "a conductor in p and reach the truncation, where power is lost (the integrated "
-        "scattering coefficient falls short of 1 by about 0.3-1.5 times this ratio, and the "
-        "shortfall falls only as L^-1/2 with the surface length L at a fixed taper): use a longer "
-        "surface for the same g",
-        stacklevel=3,
+        truncation_message(ratio[j], np.degrees(incs[j].theta)), TruncationWarning, stacklevel=3
     )
 
 

@@ -21,7 +21,14 @@ from pathlib import Path
 import numpy as np
 
 from scatterlab._checks import as_count, as_finite, as_index, as_positive
-from scatterlab.mom.formulations import _check_choices, solve
+from scatterlab.mom.formulations import (
+    _EDGE_FIELD_WARN,
+    TruncationWarning,
+    _check_choices,
+    edge_field_ratio,
+    solve,
+    truncation_message,
+)
 from scatterlab.mom.incidence import TaperedWave
 from scatterlab.runtime.results import write_npz
 
@@ -77,14 +84,25 @@ def partition_task(task):
         Matrix fill and solve times [s].
     transmitted : ndarray, shape (I,)
         Transmitted power (NaN where undefined).
+    edge_field : ndarray, shape (I,)
+        :func:`~scatterlab.mom.formulations.edge_field_ratio` in p (NaN in s): the solve's
+        :class:`~scatterlab.mom.TruncationWarning` is not raised here but summarised once over the
+        partitions by :func:`incoherent_scattering`.
     """
+    import warnings
+
     x, y, wavelength, theta_i, g, theta_s, solver, polarization, eta, method = task
     k = 2 * np.pi / wavelength
     x0 = 0.5 * (x[0] + x[-1])
     incs = [TaperedWave(t, g, x0=x0) for t in theta_i]
-    sol = solve(
-        x, y, wavelength, incs, solver=solver, polarization=polarization, eta=eta, method=method
-    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", TruncationWarning)
+        sol = solve(
+            x, y, wavelength, incs, solver=solver, polarization=polarization, eta=eta, method=method
+        )
+    edge = np.full(len(incs), np.nan)
+    if polarization == "p":
+        edge = edge_field_ratio(sol.contour, k, incs, sol.surface_field.reshape(x.size, -1))
     F = sol.far_field(theta_s)  # (S, I)
     P = np.array([inc.incident_power(k) for inc in incs])
     coef = (np.abs(F) ** 2 / (8 * np.pi * k * P)).T
@@ -95,7 +113,7 @@ def partition_task(task):
     trans = np.full(len(incs), np.nan)
     if eta is not None and method == "exact" and np.imag(eta) == 0:
         trans = np.sum(wg[:, None] * sol.transmission_coefficient(xg * np.pi / 2), 0) * (np.pi / 2)
-    return coef, F, energy, sol.timings["fill"], sol.timings["solve"], trans
+    return coef, F, energy, sol.timings["fill"], sol.timings["solve"], trans, edge
 
 
 def surface_digest(x, y) -> str:
@@ -158,6 +176,8 @@ def _load_checkpoint(path, settings, digests):
                 "differs): delete the checkpoint or pass another path"
             )
         trans = z["transmitted"][p]
+        # checkpoints written before the edge field was kept have none: NaN, no warning
+        edge = z["edge"][p] if "edge" in z.files else np.full(trans.shape, np.nan)
         done[p] = (
             z["coef"][p],
             z["F"][p],
@@ -165,6 +185,7 @@ def _load_checkpoint(path, settings, digests):
             float(z["fill"][p]),
             float(z["solve"][p]),
             trans,
+            edge,
         )
     return done
 
@@ -339,7 +360,24 @@ def incoherent_scattering(
             done[p] = r
         if ckpt is not None:
             _save_checkpoint(ckpt, done, digests, settings)
+    _warn_truncation(np.stack([done[p][6] for p in range(partitions)]), theta_i)
     return _average(done, partitions, theta_i, theta_s, wavelength, g, polarization, eta)
+
+
+def _warn_truncation(edge, theta_i):
+    """One TruncationWarning for all partitions (P, I) whose edge-field ratio exceeds the threshold."""
+    import warnings
+
+    over = edge > _EDGE_FIELD_WARN
+    if not over.any():
+        return
+    p, i = np.unravel_index(np.nanargmax(np.where(over, edge, -np.inf)), edge.shape)
+    where = f"in {int(over.any(1).sum())} of {edge.shape[0]} partitions (largest shown)"
+    warnings.warn(
+        truncation_message(edge[p, i], np.degrees(theta_i[i]), where),
+        TruncationWarning,
+        stacklevel=3,
+    )
 
 
 def _save_checkpoint(ckpt, done, digests, settings):
@@ -358,6 +396,7 @@ def _save_checkpoint(ckpt, done, digests, settings):
         fill=np.array([done[p][3] for p in keys]),
         solve=np.array([done[p][4] for p in keys]),
         transmitted=np.stack([done[p][5] for p in keys]),
+        edge=np.stack([done[p][6] for p in keys]),
         **settings,
     )
 

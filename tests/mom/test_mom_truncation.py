@@ -115,3 +115,35 @@ def test_open_profile_p_equation_is_not_reciprocal_where_the_ends_are_lit():
         err[pol] = np.max(np.abs(F1 - F2) / np.abs(F1))
     assert err["s"] < 1e-3
     assert err["p"] > 0.05
+
+
+def test_incoherent_scattering_warns_once_for_all_truncated_partitions(tmp_path):
+    """Each partition's solve would warn; the Monte Carlo average says it once, with the share of
+    partitions and the largest edge-field ratio (the same indicator as solve's)."""
+    from scatterlab.mom import TruncationWarning, incoherent_scattering
+
+    x, y = tiled(2)  # two copies of the 12.8-wavelength surface: each warns alone (ratio 0.077)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = incoherent_scattering(
+            x, y, LAM, [0.5], THS[::50], partitions=2, g=G, polarization="p"
+        )
+    trunc = [w for w in caught if issubclass(w.category, TruncationWarning)]
+    assert len(trunc) == 1
+    assert "in 2 of 2 partitions" in str(trunc[0].message)
+    assert np.isfinite(res.mean).all()
+    # a resumed run from its checkpoint warns the same way
+    ckpt = tmp_path / "mc.npz"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        incoherent_scattering(
+            x, y, LAM, [0.5], THS[::50], partitions=2, g=G, polarization="p", checkpoint=ckpt
+        )
+        incoherent_scattering(
+            x, y, LAM, [0.5], THS[::50], partitions=2, g=G, polarization="p", checkpoint=ckpt
+        )
+    assert sum(issubclass(w.category, TruncationWarning) for w in caught) == 2
+    # s on the same surface: nothing reaches the ends that matters, no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", TruncationWarning)
+        incoherent_scattering(x, y, LAM, [0.5], THS[::50], partitions=2, g=G, polarization="s")
