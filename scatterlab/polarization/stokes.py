@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scatterlab._checks import as_finite, as_turn
+from scatterlab._checks import as_finite, as_scalar, as_turn
 
 __all__ = [
     "jones_to_stokes",
@@ -122,10 +122,7 @@ def _linear(S, name="S"):
 
 
 def _min_intensity(v):
-    v = float(v)
-    if not (np.isfinite(v) and v >= 0):
-        raise ValueError(f"min_intensity must be finite and >= 0, got {v!r}")
-    return v
+    return as_scalar(v, "min_intensity", 0.0)
 
 
 def dop(S) -> np.ndarray:

@@ -70,8 +70,16 @@ def test_one_zero_light_rule_with_a_threshold_and_a_mask():
     )
     assert d[2] == 0.5 and a[2] == 0.0 and s[2] == 0.5
     assert P.dolp(S)[1] == pytest.approx(np.hypot(0.2, 0.1) / 0.5)  # default threshold 0
-    with pytest.raises(ValueError, match="min_intensity"):
-        P.dolp(S, min_intensity=-1.0)
+    for bad in (
+        -1.0,
+        None,
+        "x",
+        np.inf,
+        [0.1, 0.2],
+    ):  # wrong values and types alike: ValueError by name
+        for f in (P.dolp, P.aop, P.signed_dolp, P.dolp_aop):
+            with pytest.raises(ValueError, match="min_intensity"):
+                f(S, min_intensity=bad)
     with pytest.raises(ValueError, match=r"\(\.\.\., 4\) or \(\.\.\., 3\)"):
         P.dolp(np.ones((3, 5)))
 
