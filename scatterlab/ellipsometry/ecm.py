@@ -91,7 +91,9 @@ def reference_parameters(C: np.ndarray, kind: str) -> tuple[float, float, float]
         order = np.argsort(-np.abs(lam))
         real = np.array([lam[order[0]].real, lam[order[3]].real])
         pair = lam[order[1:3]]
-    tau = 0.5 * (real[0] + real[1])
+    tau = (
+        0.5 * real[0] + 0.5 * real[1]
+    )  # halves first: no overflow for matrices near the float limit
     if tau <= 0:
         raise ValueError(
             f"a {kind} reference has no transmitted intensity (check its intensity matrix)"
@@ -99,8 +101,8 @@ def reference_parameters(C: np.ndarray, kind: str) -> tuple[float, float, float]
     # both estimates are linear in the noise: sin 2Psi from the pair (accurate near Psi = 0,
     # polarizers), cos 2Psi = (l1 - l2)/(l1 + l2) from the real ones (accurate near 45 deg,
     # retarders); atan2 uses each where it is well conditioned
-    sin2psi = float(np.sqrt(np.abs(pair[0] * pair[1]))) / tau
-    cos2psi = (real[0] - real[1]) / (real[0] + real[1])
+    sin2psi = float(np.sqrt(np.abs(pair[0])) * np.sqrt(np.abs(pair[1]))) / tau
+    cos2psi = (0.5 * real[0] - 0.5 * real[1]) / tau
     psi = 0.5 * float(np.arctan2(sin2psi, cos2psi))
     top = pair[np.argmax(pair.imag)]
     delta = float(np.abs(np.angle(top))) if np.abs(top) > 0 else 0.0

@@ -145,3 +145,21 @@ def test_reference_mueller_and_parameters_check_their_arguments():
     # a retarder's eigenvalues give its parameters back (tau = 0.8, Psi = 40 deg, Delta = 1 rad)
     M = reference_mueller(0.8, np.radians(40), 1.0, 0.3)
     assert reference_parameters(M, "retarder") == pytest.approx((0.8, np.radians(40), 1.0))
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1.0, 1e300])
+@pytest.mark.parametrize("kind", ["polarizer", "retarder"])
+def test_reference_parameters_are_scale_invariant_to_the_float_limits(scale, kind):
+    """C is known up to the light level: Psi and Delta do not depend on it and tau scales with it,
+    also for matrices near the float range's ends (no overflow in the eigenvalue products)."""
+    import warnings
+
+    from scatterlab.ellipsometry import reference_mueller, reference_parameters
+
+    M = reference_mueller(0.7, 0.3, 1.1, 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tau, psi, delta = reference_parameters(scale * M, kind)
+    assert tau == pytest.approx(0.7 * scale, rel=1e-12)
+    assert psi == pytest.approx(0.3, abs=1e-12)
+    assert delta == pytest.approx(1.1, abs=1e-12)
