@@ -100,7 +100,10 @@ def gaussian_spectrum(k, sigma_h, corr_length):
     ndarray, shape of ``k``
         W(k) [m^3].
     """
-    return sigma_h**2 * corr_length / (2 * np.sqrt(np.pi)) * np.exp(-((k * corr_length) ** 2) / 4)
+    with np.errstate(over="ignore"):  # (k l)^2 beyond the float range: exp(-inf) = 0, the limit
+        return (
+            sigma_h**2 * corr_length / (2 * np.sqrt(np.pi)) * np.exp(-((k * corr_length) ** 2) / 4)
+        )
 
 
 def rough_surface(length, dx, sigma_h, corr_length, rng):

@@ -229,3 +229,20 @@ def test_tapered_wave_too_narrow_for_its_power_raises_not_divides():
     c = np.cos(0.3)
     corr = (1 + 2 * np.tan(0.3) ** 2) / (2 * (2 * np.pi * 15.0 * c) ** 2)
     assert p == pytest.approx(15.0 * np.sqrt(np.pi / 2) * c * (1 - corr), rel=1e-15)
+
+
+def test_gaussian_spectrum_of_a_very_long_correlation_is_a_delta_without_warnings():
+    """l -> inf: W(K) = sigma_h^2 l / (2 sqrt(pi)) exp(-(K l)^2 / 4) vanishes at every K != 0 (its
+    integral sigma_h^2 concentrated at K = 0), also where (K l)^2 overflows."""
+    import warnings
+
+    from scatterlab.mom import spm1_coefficient
+    from scatterlab.mom.surfaces import gaussian_spectrum
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert np.all(gaussian_spectrum(np.array([0.5, 3.0]), 1e-3, 1e300) == 0.0)
+        assert gaussian_spectrum(0.0, 1e-3, 1e300) == pytest.approx(
+            1e-6 * 1e300 / (2 * np.sqrt(np.pi))
+        )
+        assert spm1_coefficient(0.0, 0.3, 2 * np.pi, (1e-3, 1e300)) == 0.0

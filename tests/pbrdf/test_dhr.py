@@ -93,3 +93,13 @@ def test_table_grid_sizes_are_checked(kw, name):
     bicubic table needs 4 nodes per axis."""
     with pytest.raises(ValueError, match=rf"{name} must be an integer >= 4"):
         DHRTable(cache=False, **kw)
+
+
+def test_unshadowed_sphere_dhr_near_normal_incidence_is_one_without_warnings():
+    """theta_i -> 0: no facet is cut off by the horizon, so the unshadowed DHR is exactly 1 (Phi(a) -> 1,
+    the tan term -> 0), also where cot(theta_i)/sigma overflows its square."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert dhr_sphere_unshadowed(np.array([0.0, 1e-300, 1e-150]), 0.1) == pytest.approx(1.0)
