@@ -143,6 +143,14 @@ def _check(frames, diversity, pupil, gains, read_noise, pad, smoothing, iteratio
             f"frames must be (F, H, W) with F >= 2 (the focused frame and at least one with a known "
             f"phase offset), got shape {d.shape}"
         )
+    dark = [f for f in range(d.shape[0]) if not np.any(d[f] > 0)]
+    if (
+        dark
+    ):  # a frame without light says nothing of the phase; all dark, nothing of the object either
+        raise ValueError(
+            f"frames {dark} hold no photons (every count is <= 0): each frame, the focused one and the "
+            "diverse ones, needs light to identify the PSF"
+        )
     A = as_finite(pupil, "pupil")
     if A.ndim != 2 or A.shape[0] != A.shape[1] or not np.any(A > 0) or np.any(A < 0):
         raise ValueError(

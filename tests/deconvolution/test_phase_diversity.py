@@ -150,3 +150,11 @@ def test_phase_diversity_refuses_bad_input():
         phase_diversity(frames, defocus, -A)
     with pytest.raises(ValueError, match="pad = 0 is too small"):
         phase_diversity(np.ones((2, 16, 16)), defocus, A, pad=0)
+    dark = frames.copy()
+    dark[1] = (
+        0.0  # a diverse frame without light (as blind_deconvolve refuses data without photons)
+    )
+    with pytest.raises(ValueError, match=r"frames \[1\] hold no photons"):
+        phase_diversity(dark, defocus, A)
+    with pytest.raises(ValueError, match=r"frames \[0, 1\] hold no photons"):
+        phase_diversity(np.zeros_like(frames), defocus, A)
