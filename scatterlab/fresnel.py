@@ -32,10 +32,11 @@ divide zero by zero at grazing incidence. Here they are rewritten exactly as
 
 (multiply numerator and denominator by the conjugate-like factor); the factors after
 :math:`(1-\eta^2)` are the reduced coefficients of :func:`reduced_coefficients`, the one kernel
-every reflection formula of the package uses. :math:`A, B` are computed without cancellation
-from :math:`AB = n\kappa`, with :math:`D = n^2 - \kappa^2 - \sin^2\theta` formed in whichever
-exact form is accurate (:math:`(n^2 - 1) - \kappa^2 + \cos^2\theta` near :math:`\eta = 1`, the
-plain form for :math:`|\eta| \ll 1`).
+every reflection formula of the package uses (the DOLP of :func:`smooth_dolp` is the ratio of
+non-negative terms in :math:`u` they reduce to, Eq. 115). :math:`A, B` are computed without
+cancellation from :math:`AB = n\kappa`, with :math:`D = n^2 - \kappa^2 - \sin^2\theta` formed in
+whichever exact form is accurate (:math:`(n^2 - 1) - \kappa^2 + \cos^2\theta` near
+:math:`\eta = 1`, the plain form for :math:`|\eta| \ll 1`).
 
 Valid range. ``n >= 0`` (``n = 0`` with ``kappa > 0`` is a lossless plasma below its plasma
 frequency: total reflection) and ``1e-50 <= |eta| <= 1e50``; outside it a :class:`ValueError`
@@ -233,7 +234,7 @@ def reduced_coefficients(
         ``|eta| << 1``). Default ``(1 - cos)(1 + cos)``.
     derivative : bool
         Also return :math:`dr_s'/d\eta` and :math:`dr_p'/d\eta` (kept finite at the branch point
-        :math:`u = 0`, where :math:`du/d\eta = \eta/u` is evaluated at ``|u| = 1e-12``).
+        :math:`u = 0`, where :math:`du/d\eta = \eta/u` is evaluated at ``|u| = 1e-12 |eta|``).
     normalize : bool
         Where a denominator is below 1e-60 (``eta -> 1`` at grazing incidence, where the reduced
         factors grow like ``1/|1 - eta^2|`` and their squares overflow), divide ``rs, rp`` (and
@@ -267,7 +268,7 @@ def reduced_coefficients(
         rs = 1.0 / (ds * ds)
         rp = -num_p / (dp * dp)
     f = (1 - eta) * (1 + eta)
-    drs, drp = _reduced_derivatives(eta, c, u, ds, dp, num_p) if derivative else (None, None)
+    drs, drp = _reduced_derivatives(eta, c, s2, u, ds, dp) if derivative else (None, None)
     if normalize and _tiny(ds, dp):
         return _normalized(rs, rp, f, drs, drp)
     return ReducedFresnel(rs, rp, f.real**2 + f.imag**2, drs, drp)
@@ -316,56 +317,104 @@ def _tiny(*denominators) -> bool:
     return any(np.any(np.abs(x.real) + np.abs(x.imag) < 1e-60) for x in denominators)
 
 
-def _reduced_derivatives(eta, c, u, ds, dp, num_p):
-    """``d rs'/d eta``, ``d rp'/d eta`` (``du/d eta = eta/u``, evaluated at ``|u| >= 1e-12``)."""
-    du = eta / np.where(np.abs(u) < 1e-12, 1e-12, u)
+# |u| below this times |eta| is the branch point u = 0 (eta = sin(theta)), where du/deta = eta/u is
+# infinite: it is evaluated at |u| = BRANCH_FLOOR |eta|, so |du/deta| <= 1 / BRANCH_FLOOR
+BRANCH_FLOOR = 1e-12
+
+
+def _du_deta(eta, u):
+    """``du/d eta = eta/u`` (``u = sqrt(eta^2 - sin^2)``), capped at ``1/BRANCH_FLOOR`` in modulus.
+
+    The floor is relative to ``|eta|``: at normal incidence ``u = eta`` and ``du/d eta = 1`` however
+    small ``|eta|`` is (an absolute floor gave ``eta/1e-12`` there).
+    """
+    floor = BRANCH_FLOOR * np.abs(eta)
+    return eta / np.where(np.abs(u) < floor, floor, u)
+
+
+def _reduced_derivatives(eta, c, s2, u, ds, dp):
+    """``d rs'/d eta``, ``d rp'/d eta`` (``du/d eta`` from :func:`_du_deta`).
+
+    ``rp' = -N/dp^2`` with ``N = eta^2 c^2 - s^2``, ``dp = eta^2 c + u``: the numerator of
+    ``d rp'/d eta = -(N' dp - 2 N dp')/dp^3`` is written with ``u^2 = eta^2 - s^2`` as
+    ``-2 eta (eta^2 c^3 - 2 c s^2) + 2 s^4 eta/u``, without the cancellation of its ``eta^2``
+    terms as ``eta -> 0`` near normal incidence (it gave ``-2e20`` instead of ``2`` at
+    ``eta = 1e-20``).
+    """
+    du = _du_deta(eta, u)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         drs = -2.0 * du / (ds * ds * ds)
-        drp = -(2 * eta * c * c * dp - 2 * num_p * (2 * eta * c + du)) / (dp * dp * dp)
+        drp = (2 * eta * c * (eta * eta * c * c - 2 * s2) - 2 * s2 * s2 * du) / (dp * dp * dp)
     return drs, drp
 
 
 def smooth_dolp(eta, cos_theta, sin2_theta=None, *, gradient: bool = False, checked: bool = False):
     r"""DOLP of unpolarized light reflected by a smooth surface, :math:`(R_s - R_p)/(R_s + R_p)`.
 
-    The facet DOLP of the pBRDF (Eq. 114 at the facet angle :math:`\beta`), computed from the
-    reduced coefficients of :func:`reduced_coefficients`, so it is the continuous extension at
-    :math:`\eta = 1` (a formula of eta: :meth:`scatterlab.pbrdf.Model.dolp`, a measurement, is NaN
-    where no light is reflected). Thilak et al.'s Eq. 115 is the same function
-    (:func:`scatterlab.inversion.thilak.thilak_dop`, tested equal).
+    The facet DOLP of the pBRDF (Eq. 114 at the facet angle :math:`\beta`). It is evaluated as
+    Thilak et al.'s Eq. 115, the same function written with :math:`u = A - jB`
+    (:func:`refraction_term`),
+
+    .. math::
+
+       P = \frac{2A\sin^2\theta\cos\theta}{|u|^2\cos^2\theta + \sin^4\theta},
+
+    a ratio of non-negative terms, so it keeps its relative accuracy over the whole valid range
+    ``1e-50 <= |eta| <= 1e50`` (the difference :math:`R_s - R_p` cancels for :math:`|\eta| \to 0`
+    and :math:`|\eta| \to \infty`, and the squares of the reduced coefficients underflow beyond
+    :math:`|\eta| \approx 10^{40}`). It is the continuous extension at :math:`\eta = 1`
+    (:math:`u = \cos\theta`; a formula of eta: :meth:`scatterlab.pbrdf.Model.dolp`, a measurement,
+    is NaN where no light is reflected), 0 at normal and at grazing incidence and where the
+    reflection is total (:math:`A = 0`).
+    (:func:`scatterlab.inversion.thilak.thilak_dop` is the same function continued to any real
+    ``(n, kappa)``.)
 
     Parameters
     ----------
     eta : array_like of complex, or ``"pec"``
+        Complex index ``n - 1j*kappa`` [dimensionless], ``1e-50 <= |eta| <= 1e50``; ``"pec"`` (a
+        perfect conductor) gives 0.
     cos_theta, sin2_theta : array_like
         As in :func:`reduced_coefficients` (angle of incidence on the reflecting surface).
     gradient : bool
-        Also return the derivatives in ``(n, kappa)``.
+        Also return the derivatives in ``(n, kappa)``, from :math:`du/d\eta = \eta/u`
+        (``u`` holomorphic): :math:`\partial A/\partial n = \mathrm{Re}(du/d\eta)`,
+        :math:`\partial A/\partial\kappa = \mathrm{Im}(du/d\eta)`. At the branch point
+        :math:`u = 0` (``eta = sin(theta)``, real), where the derivative in ``n`` is infinite,
+        :math:`du/d\eta` is evaluated at ``|u| = 1e-12 |eta|``, as in
+        :func:`reduced_coefficients`.
     checked : bool
-        Skip validation.
+        Skip validation (inputs already validated; they broadcast).
 
     Returns
     -------
-    dolp : ndarray in ``[0, 1]``, broadcast shape.
-    grad : ndarray ``(..., 2)``, d/dn and d/dkappa, or None.
+    dolp : ndarray in ``[0, 1]``, broadcast shape of the inputs.
+    grad : ndarray ``(..., 2)`` or None
+        ``d dolp/dn`` and ``d dolp/dkappa`` [dimensionless], finite; None unless ``gradient``.
     """
-    r = reduced_coefficients(
-        eta, cos_theta, sin2_theta, derivative=gradient, normalize=True, checked=checked
-    )
-    a = r.rs.real**2 + r.rs.imag**2
-    b = r.rp.real**2 + r.rp.imag**2
-    tot = a + b
-    # exact grazing: R_s = R_p = 1 for every medium (and the limit at eta = 1 as well)
-    grazing = np.asarray(cos_theta) == 0
-    with np.errstate(invalid="ignore"):  # round-off can leave -3e-16 near normal incidence
-        P = np.where(grazing, 0.0, np.clip((a - b) / tot, 0.0, 1.0))
+    c = np.asarray(cos_theta, float)
+    if isinstance(eta, str):
+        zero = _reduced_pec(eta, c, False).scale * 0.0
+        return zero, (np.zeros(zero.shape + (2,)) if gradient else None)
+    if not checked:
+        eta, c = _check_index_and_cosine(eta, c)
+        if sin2_theta is not None:
+            sin2_theta = _check_sin2(sin2_theta, c)
+    s2 = (1 - c) * (1 + c) if sin2_theta is None else np.asarray(sin2_theta, float)
+    u = _normal_term(eta, c * c, s2)
+    a = u.real
+    # q > 0: c^2 |u|^2 >= c^2 |eta|^2 at normal incidence, s^4 > 0 elsewhere; <= 1e100 + 1
+    q = c * c * (u.real**2 + u.imag**2) + s2 * s2
+    f = 2 * s2 * c / q
+    # P <= 1 exactly (2 A s^2 c <= A^2 c^2 + s^4): clip the last bit; + 0.0 turns the -0.0 of
+    # kappa = -0.0 into 0
+    P = np.minimum(f * a, 1.0) + 0.0
     if not gradient:
         return P, None
-    gs, gp = r.rs.conj() * r.drs, r.rp.conj() * r.drp
-    grad = np.empty(P.shape + (2,))
-    tot2 = tot * tot
-    for k, part in enumerate((np.real, np.imag)):
-        grad[..., k] = np.where(grazing, 0.0, 4 * (b * part(gs) - a * part(gp)) / tot2)
+    du = _du_deta(eta, u)
+    udu = np.conj(u) * du  # (d|u|^2/dn, d|u|^2/dkappa) = 2 (Re, Im) of conj(u) du/deta
+    ac = 2 * a * c * c / q
+    grad = np.stack([f * (du.real - ac * udu.real), f * (du.imag - ac * udu.imag)], -1)
     return P, grad
 
 

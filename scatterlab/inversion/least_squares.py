@@ -723,7 +723,12 @@ class _Whitened:
 
 def _laplace_covariance(forward, p, mask, cost, noise):
     """Laplace covariance s^2 (J^T J)^+ at the solutions ``p`` (..., P) and the identifiable
-    parameters."""
+    parameters.
+
+    Only the finite entries (the identifiable block) are scaled by ``s^2``: an undetermined
+    parameter keeps its infinite variance (and NaN covariances) also where ``s^2 = 0`` (an exact,
+    noise-free fit), where ``inf * 0`` would be NaN.
+    """
     batch, P = p.shape[:-1], p.shape[-1]
     _, J = forward.value_and_jacobian(p.reshape(-1, P))
     J = J.reshape(batch + J.shape[-2:])
@@ -732,7 +737,9 @@ def _laplace_covariance(forward, p, mask, cost, noise):
     s2 = noise**2 if noise is not None else np.where(m > P, 2 * cost / np.maximum(m - P, 1), np.nan)
     A = np.einsum("...mi,...mj->...ij", J, J)
     cov, identifiable = inverse_information(A)
-    return cov * np.asarray(s2)[..., None, None], identifiable
+    finite = np.isfinite(cov)
+    scaled = np.where(finite, cov, 0.0) * np.asarray(s2)[..., None, None]
+    return np.where(finite, scaled, cov), identifiable
 
 
 def fit_dolp_per_pixel(

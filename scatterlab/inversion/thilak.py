@@ -38,26 +38,71 @@ def thilak_dop(n, kappa, beta) -> np.ndarray:
     for ``n, kappa >= 0`` it is the smooth-facet DOLP ``(Rs - Rp)/(Rs + Rp)``: this evaluates the
     package's kernel :func:`scatterlab.fresnel.smooth_dolp` at ``|n| - j|kappa|`` (tested equal to
     the printed formula with the errata's A and B), continued as an odd function of ``cos(beta)``
-    like the printed formula.
+    like the printed formula. Outside the kernel's range ``1e-50 <= |eta| <= 1e50`` it is the
+    limit: 0 at ``n = kappa = 0`` (evaluated at ``|eta| = 1e-50``), and for
+    ``max(|n|, |kappa|) > 1e49`` the large-index form of Eq. 115 (:func:`_large_index_dop`,
+    relative error below ``|eta|^-2``), finite up to the largest floats.
 
     Parameters
     ----------
     n, kappa : array_like
-        Real and imaginary parts of the index (any sign).
+        Real and imaginary parts of the index (any sign, finite) [dimensionless].
     beta : array_like [rad]
         Facet angle.
 
     Returns
     -------
-    ndarray, broadcast shape.
+    ndarray, broadcast shape, in ``[-1, 1]`` (``[0, 1]`` for ``beta`` in ``[0, pi/2]``).
     """
     n, kappa, beta = np.broadcast_arrays(
         np.abs(np.asarray(n, float)), np.abs(np.asarray(kappa, float)), np.asarray(beta, float)
     )
-    eta = n - 1j * kappa
-    eta = np.where(np.abs(eta) < ETA_MIN, ETA_MIN, eta)  # n = kappa = 0: the limit |eta| -> 0
     c = np.cos(beta)  # the fit may visit beta > 90 deg, where Eq. 115 is odd in cos(beta)
-    return np.sign(c) * smooth_dolp(eta, np.abs(c), np.sin(beta) ** 2, checked=True)[0]
+    s2 = np.sin(beta) ** 2
+    large = np.maximum(n, kappa) > LARGE_INDEX
+    eta = np.where(large, 1.0, n - 1j * kappa)
+    eta = np.where(np.abs(eta) < ETA_MIN, ETA_MIN, eta)  # n = kappa = 0: the limit |eta| -> 0
+    P = smooth_dolp(eta, np.abs(c), s2, checked=True)[0]
+    if np.any(large):
+        P = np.where(large, _large_index_dop(n, kappa, np.abs(c), s2, large), P)
+    return np.sign(c) * P
+
+
+# beyond this max(|n|, |kappa|) Eq. 115 is evaluated in its large-index form (|eta| >= 1e49 there,
+# and |eta| <= 1.5e49 < ETA_MAX below it, inside the range of smooth_dolp)
+LARGE_INDEX = 1e49
+
+
+def _large_index_dop(n, kappa, c, s2, large):
+    r"""Eq. 115 for ``|eta| -> inf``: :math:`P = 2 n s^2 c / (|\eta|^2 c^2 + s^4)`.
+
+    With :math:`u = \eta\sqrt{1 - s^2/\eta^2}`, :math:`A = n (1 + O(|\eta|^{-2}))` and
+    :math:`|u|^2 = |\eta|^2 (1 + O(|\eta|^{-2}))`, so the relative error is below ``1e-97`` where it
+    is used (``large``: ``max(n, kappa) > 1e49``). Written without overflow up to the largest
+    floats as :math:`P = 2 (n/|\eta|)\, g(t)`, :math:`g(t) = t/(1 + t^2)` with
+    :math:`t = c |\eta| / s^2` (``g(t) = g(1/t)``, so ``t > 1`` uses ``1/t = s^2/(c |eta|)``).
+
+    Parameters
+    ----------
+    n, kappa : ndarray
+        ``|n|``, ``|kappa|`` [dimensionless], one shape.
+    c, s2 : ndarray
+        ``|cos(beta)|`` and ``sin(beta)^2``, the same shape.
+    large : ndarray of bool
+        Where the result is used; elsewhere it is a finite placeholder.
+
+    Returns
+    -------
+    ndarray in ``[0, 1]``, the shape of the inputs.
+    """
+    m = np.where(large, np.maximum(n, kappa), 1.0)
+    r = np.hypot(n / m, kappa / m)  # |eta| = m r, r in [1, sqrt(2)] where large
+    with np.errstate(over="ignore", divide="ignore"):  # t or 1/t is inf: g = 0 (normal, grazing)
+        cm = c * m
+        t = cm / s2 * r
+        inv = s2 / cm / r
+    q = np.where(t > 1, inv, t)  # in [0, 1]
+    return 2 * (n / m / r) * (q / (1 + q * q))
 
 
 @dataclass
