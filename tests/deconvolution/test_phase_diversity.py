@@ -102,13 +102,14 @@ def test_phase_diversity_finds_the_turbulent_psf_that_one_frame_cannot():
 
 
 def test_phase_diversity_stays_finite_on_zero_photon_frames():
-    """Dark frames, and a few photons on a dark field with read noise: no NaN or negative object."""
+    """A few photons on a dark field, with read noise or dark-subtracted: no NaN or negative object.
+    (Frames without any photon carry nothing of the phase and are refused: test below.)"""
     A = circular_pupil(16, 8)
     div = np.stack([np.zeros((16, 16)), defocus_phase(A, 1.0)])
     sparse = np.zeros((2, 32, 32))
     sparse[:, 10:20, 10:20] = np.random.default_rng(0).poisson(3, (2, 10, 10))
     negative = sparse + np.random.default_rng(1).normal(0.0, 5.0, sparse.shape)  # dark-subtracted
-    for frames, noise in ((np.zeros((2, 32, 32)), 0.0), (sparse, 5.0), (negative, 0.0)):
+    for frames, noise in ((sparse, 5.0), (negative, 0.0)):
         res = phase_diversity(frames, div, A, read_noise=noise, smoothing=(2, 0), iterations=5)
         for a in (res.phase, res.psfs, res.object):
             assert np.all(np.isfinite(a))
