@@ -22,9 +22,11 @@ there is no light) and masks those pixels.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from scatterlab._checks import as_finite, as_rng, as_turn
+from scatterlab._checks import as_finite, as_rng, as_scalar, as_turn
 from scatterlab.polarization import dolp_aop
 
 __all__ = [
@@ -203,52 +205,74 @@ def detect(
 ) -> np.ndarray:
     """Noisy, dark-subtracted detector images in photo-electrons.
 
+    The mean of pixel ``(k, h, w)`` is ``photons * channels[k, h, w] / scale`` [e-], formed with
+    ``channels`` and ``scale`` scaled by powers of two (exactly) so that no intermediate product overflows:
+    intensities of any magnitude, 1e-300 or 1e300, give the same counts as intensities near 1.
+
     Parameters
     ----------
-    channels : array ``(K, H, W)`` of non-negative intensities.
+    channels : array_like, shape ``(K, H, W)``
+        Non-negative, finite intensities [any unit].
+    rng : None, int, SeedSequence, BitGenerator or Generator
+        Seeds the noise.
     photons : float
         Expected photo-electrons for intensity ``scale`` (default: the largest channel intensity), in
-        ``(0, 1e18]``: the Poisson sampler draws means up to 9.2e18 e- only (its int64 range).
+        ``(0, 1e18]`` [e-]: the Poisson sampler draws means up to 9.2e18 e- only (its int64 range).
     read_noise : float
-        Gaussian read noise [e-] per read (the image and its dark frame are each read once), ``>= 0``.
+        Gaussian read noise [e-] per read (the image and its dark frame are each read once), in
+        ``[0, 1e18]`` (a few e- in a real camera; the bound keeps the difference of two reads finite).
     dark_current : float
-        Mean dark electrons per pixel, in ``[0, 1e18]``; a dark frame with the same statistics is
+        Mean dark electrons per pixel, in ``[0, 1e18]`` [e-]; a dark frame with the same statistics is
         subtracted.
     scale : float, optional
-        The intensity that gives ``photons`` (> 0); the brightest pixel's mean,
-        ``photons * max(channels) / scale``, must not exceed 1e18 e- either.
+        The intensity that gives ``photons`` (finite, > 0; same unit as ``channels``); the brightest pixel's
+        mean, ``photons * max(channels) / scale``, must not exceed 1e18 e- either.
 
     Returns
     -------
-    array ``(K, H, W)`` [e-]: Poisson(signal + dark) + read - (Poisson(dark) + read). Zero-photon pixels stay
-    finite (their value is pure noise).
+    ndarray, shape ``(K, H, W)``
+        Poisson(signal + dark) + read - (Poisson(dark) + read) [e-]. Zero-photon pixels stay finite (their
+        value is pure noise).
+
+    Raises
+    ------
+    ValueError
+        ``channels`` negative or not finite; ``photons``, ``read_noise``, ``dark_current`` or ``scale`` not a
+        single finite number in its range (``None`` or a string included); or a brightest pixel's mean
+        above 1e18 e- (``scale`` too small for ``photons``).
     """
     I = as_finite(channels, "channels")
     if np.any(I < 0):
         raise ValueError("channels must be non-negative intensities")
-    limit = "the Poisson sampler draws means up to 9.2e18 e- only"
-    if not (np.isfinite(photons) and 0 < photons <= _MAX_MEAN):
-        raise ValueError(
-            f"photons must be finite and in (0, {_MAX_MEAN:g}] [e-] ({limit}), got {photons!r}"
-        )
-    if not (np.isfinite(read_noise) and read_noise >= 0):
-        raise ValueError(f"read_noise must be finite and >= 0 [e-], got {read_noise!r}")
-    if not (np.isfinite(dark_current) and 0 <= dark_current <= _MAX_MEAN):
-        raise ValueError(
-            f"dark_current must be finite and in [0, {_MAX_MEAN:g}] [e-] ({limit}), got {dark_current!r}"
-        )
-    if scale is not None and not (np.isfinite(scale) and scale > 0):
-        raise ValueError(
-            f"scale (the intensity that gives `photons`) must be finite and > 0, got {scale!r}"
-        )
-    if scale is not None and float(photons) * (float(I.max()) / float(scale)) > _MAX_MEAN:
-        raise ValueError(
-            f"scale ({scale!r}) is too small for photons ({photons!r}): the brightest pixel's mean, "
-            f"photons * max(channels) / scale, must be <= {_MAX_MEAN:g} e- ({limit})"
-        )
+    sampler = "the Poisson sampler draws means up to 9.2e18 e- only"
+    limit = f" [e-] ({sampler})"
+    photons = as_scalar(photons, "photons", 0.0, _MAX_MEAN, open_lo=True, unit=limit)
+    read_noise = as_scalar(read_noise, "read_noise", 0.0, _MAX_MEAN, unit=" [e-]")
+    dark_current = as_scalar(dark_current, "dark_current", 0.0, _MAX_MEAN, unit=limit)
+    if scale is not None:
+        scale = as_scalar(scale, "scale (the intensity that gives `photons`)", 0.0, open_lo=True)
+    peak = float(I.max(initial=0.0))
+    if peak == 0:
+        expected = np.zeros_like(I)  # no light: the frame is dark current and read noise only
+    else:
+        scale = peak if scale is None else scale
+        # photons * I / scale with I and scale first scaled by powers of two into [0.5, 1) (exact): the
+        # product cannot overflow (photons * I did for I = 1e300), and the result, scaled back exactly, is
+        # the plain expression's to the last bit wherever that one did not overflow or underflow
+        e_peak, e_scale = math.frexp(peak)[1], math.frexp(scale)[1]
+        with np.errstate(over="ignore", under="ignore"):
+            ratio = photons * np.ldexp(I, -e_peak) / math.ldexp(scale, -e_scale)  # <= 2 photons
+            expected = np.ldexp(ratio, e_peak - e_scale)
+        brightest = float(expected.max())
+        # rounding may put photons * peak / peak an ulp above photons = 1e18: allowed (the sampler's limit
+        # is 9.2e18)
+        if not brightest <= _MAX_MEAN * (1 + 1e-12):
+            shown = f"{brightest:.3g} e-" if math.isfinite(brightest) else "above 1.8e308 e-"
+            raise ValueError(
+                f"scale ({scale!r}) is too small for photons ({photons!r}): the brightest pixel's mean, "
+                f"photons * max(channels) / scale = {shown}, must be <= {_MAX_MEAN:g} e- ({sampler})"
+            )
     rng = as_rng(rng)
-    scale = float(I.max()) if scale is None else float(scale)
-    expected = photons * I / scale if scale > 0 else np.zeros_like(I)
     frame = rng.poisson(expected + dark_current).astype(float) + read_noise * rng.standard_normal(
         I.shape
     )

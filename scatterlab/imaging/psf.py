@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize, special
 
-from scatterlab._checks import as_count, as_finite, as_positive
+from scatterlab._checks import as_count, as_finite, as_positive, as_scalar
 
 __all__ = [
     "circular_pupil",
@@ -51,14 +51,27 @@ def circular_pupil(n: int, radius: float, obscuration: float = 0.0) -> np.ndarra
     -------
     ndarray, shape (n, n)
         1 inside the pupil, 0 outside.
+
+    Raises
+    ------
+    ValueError
+        ``n`` not an integer >= 4, ``radius`` not a single number in ``(0, n/2]``, ``obscuration`` not a
+        single number in [0, 1), or a pupil with no pixel centre inside.
     """
-    if not (isinstance(n, (int, np.integer)) and n >= 4):
-        raise ValueError("n must be an integer >= 4")
-    radius = float(as_positive(radius, "radius"))
+    n = as_count(n, "n", 4, " [pixels]")
+    radius = as_scalar(radius, "radius", 0.0, open_lo=True, unit=" [pixels]")
     if radius > n / 2:
         raise ValueError(f"radius ({radius} px) must fit in the grid (<= n/2 = {n / 2})")
-    if not 0 <= obscuration < 1:
-        raise ValueError("obscuration must be in [0, 1)")
+    allowed = (
+        "obscuration must be a single finite number in [0, 1) (a fraction of radius), got "
+        f"{obscuration!r}"
+    )
+    try:
+        obscuration = as_scalar(obscuration, "obscuration", 0.0, 1.0)
+    except ValueError:
+        raise ValueError(allowed) from None
+    if obscuration == 1:
+        raise ValueError(allowed)
     y, x = np.mgrid[0:n, 0:n] - (n - 1) / 2
     r = np.hypot(x, y)
     inside = (r <= radius) & (r >= obscuration * radius)
@@ -78,7 +91,9 @@ def psf(pupil, phase=None, pad: int = 2) -> np.ndarray:
     Parameters
     ----------
     pupil : array_like, shape (..., n, n)
-        Pupil amplitude (transmits light: not zero everywhere).
+        Pupil amplitude [any unit], finite and not zero everywhere (it must transmit light). Only its shape
+        matters: it is scaled by a power of two to a largest magnitude in [0.5, 1) first (exact), so any
+        magnitude, 1e-300 or 1e300, gives the same finite PSF.
     phase : array_like, optional
         Pupil phase [rad], broadcastable to ``pupil`` (e.g. ``(n, n)``, or ``(F, n, n)`` for ``F``
         screens through one pupil).
@@ -103,6 +118,10 @@ def psf(pupil, phase=None, pad: int = 2) -> np.ndarray:
         raise ValueError(
             "pupil must transmit light (it is zero everywhere): the PSF would be undefined"
         )
+    # scaled by a power of two to a largest magnitude in [0.5, 1) first (exact): |field| < 1, so the FFT's
+    # squares neither overflow (a pupil of 1e200) nor underflow to a 0/0 normalisation (1e-200), and the
+    # unit-sum PSF is unchanged by the scale
+    pupil = np.ldexp(pupil, -np.frexp(np.max(np.abs(pupil), axis=(-2, -1), keepdims=True))[1])
     if phase is None:
         field = pupil.astype(complex)
     else:
@@ -125,24 +144,42 @@ def psf(pupil, phase=None, pad: int = 2) -> np.ndarray:
 def otf(h) -> np.ndarray:
     """Optical transfer function of a centred PSF, normalised to 1 at zero frequency (centred).
 
+    The PSF is scaled by a power of two to a largest magnitude in [0.5, 1) before its FFT (exact), so a PSF
+    of any magnitude (a subnormal 1e-320 peak, or 1e300) gives the same finite OTF.
+
     Parameters
     ----------
     h : array_like, shape (..., n, n)
-        Centred PSF(s).
+        Centred PSF(s) [any intensity unit], finite; each must have a positive sum, larger than the
+        rounding error of summing it (``n^2 * 2.2e-16 * sum|h|``: a PSF whose negative values cancel its
+        light has no defined normalisation).
 
     Returns
     -------
     ndarray, shape (..., n, n), complex
-        Centred OTF, 1 at zero frequency.
+        Centred OTF [dimensionless], 1 at zero frequency (pixel ``n // 2``).
+
+    Raises
+    ------
+    ValueError
+        ``h`` not finite or not at least 2-D, or a PSF whose sum is not positive.
     """
-    h = np.asarray(h, float)
-    if not np.all(np.sum(h, axis=(-2, -1)) > 0):
-        raise ValueError(
-            "h must have a positive sum (a PSF with light): its OTF is normalised by it"
-        )
+    h = as_finite(h, "h")
+    if h.ndim < 2 or min(h.shape[-2:]) < 1:
+        raise ValueError(f"h must be a PSF (n, n) or a stack (..., n, n), got shape {h.shape}")
+    # scaled by a power of two to a largest magnitude in [0.5, 1) (exact; a dark PSF stays 0 and is refused
+    # below): the FFT and the normalisation neither overflow nor divide by a subnormal
+    h = np.ldexp(h, -np.frexp(np.max(np.abs(h), axis=(-2, -1), keepdims=True, initial=0.0))[1])
     O = np.fft.fftshift(np.fft.fft2(np.fft.ifftshift(h, axes=(-2, -1))), axes=(-2, -1))
-    c = h.shape[-1] // 2
-    return O / O[..., c, c][..., None, None]
+    dc = O[..., h.shape[-2] // 2, h.shape[-1] // 2].real  # the sum of h (imaginary part 0)
+    rounding = h.shape[-1] * h.shape[-2] * np.finfo(float).eps * np.sum(np.abs(h), axis=(-2, -1))
+    if not np.all(dc > rounding):
+        raise ValueError(
+            "h must have a positive sum (a PSF with light), above its rounding error: its OTF is "
+            "normalised by it"
+        )
+    # |O| <= sum|h| < dc / (n^2 eps): the ratio stays below 1 / (n^2 eps), far from overflow
+    return O / dc[..., None, None]
 
 
 def mtf(h) -> np.ndarray:
@@ -243,16 +280,26 @@ def long_exposure_mtf(nu, d_over_r0) -> np.ndarray:
     nu : array_like
         Spatial frequency normalised by the cutoff ``D / lambda`` (clipped to [0, 1]).
     d_over_r0 : float
-        Aperture diameter over Fried parameter, ``D / r0`` (> 0).
+        Aperture diameter over Fried parameter, ``D / r0`` [dimensionless], a single finite number > 0
+        (up to 1.8e308: where the exponent exceeds the double range the MTF is 0, its value to double
+        precision).
 
     Returns
     -------
     ndarray, shape of ``nu``
-        The long-exposure MTF.
+        The long-exposure MTF [dimensionless], in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        ``d_over_r0`` not a single finite number > 0.
     """
-    d_over_r0 = float(as_positive(d_over_r0, "d_over_r0"))
+    d_over_r0 = as_scalar(d_over_r0, "d_over_r0", 0.0, open_lo=True)
     nu = np.clip(np.asarray(nu, float), 0, 1)
-    return diffraction_mtf(nu) * np.exp(-3.44 * (nu * d_over_r0) ** (5 / 3))
+    # (nu D/r0)^(5/3) overflows to inf for nu D/r0 > 1e185: exp(-inf) = 0 is then the MTF to double
+    # precision (it is below exp(-1e308)); a tiny D/r0 underflows to 0, an MTF of diffraction_mtf
+    with np.errstate(over="ignore", under="ignore"):
+        return diffraction_mtf(nu) * np.exp(-3.44 * (nu * d_over_r0) ** (5 / 3))
 
 
 def short_exposure_mtf(nu, d_over_r0, alpha: float = 1.0) -> np.ndarray:
@@ -263,24 +310,32 @@ def short_exposure_mtf(nu, d_over_r0, alpha: float = 1.0) -> np.ndarray:
     nu : array_like
         Spatial frequency normalised by the cutoff ``D / lambda`` (clipped to [0, 1]).
     d_over_r0 : float
-        Aperture diameter over Fried parameter, ``D / r0`` (> 0).
+        Aperture diameter over Fried parameter, ``D / r0`` [dimensionless], a single finite number > 0
+        (up to 1.8e308: where the exponent exceeds the double range the MTF is 0, its value to double
+        precision).
     alpha : float
-        1 in the near field, 0.5 in the far field (in [0, 1]).
+        1 in the near field, 0.5 in the far field (a single number in [0, 1]).
 
     Returns
     -------
     ndarray, shape of ``nu``
-        The short-exposure MTF.
+        The short-exposure MTF [dimensionless], in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        ``d_over_r0`` not a single finite number > 0, or ``alpha`` not a single number in [0, 1].
     """
-    d_over_r0 = float(as_positive(d_over_r0, "d_over_r0"))
-    if np.ndim(alpha) != 0 or not 0.0 <= float(alpha) <= 1.0:
-        raise ValueError(
-            f"alpha must be a single float in [0, 1] (1 near field, 0.5 far), got {alpha!r}"
-        )
+    d_over_r0 = as_scalar(d_over_r0, "d_over_r0", 0.0, open_lo=True)
+    alpha = as_scalar(alpha, "alpha", 0.0, 1.0, unit=" (1 near field, 0.5 far)")
     nu = np.clip(np.asarray(nu, float), 0, 1)
-    return diffraction_mtf(nu) * np.exp(
-        -3.44 * (nu * d_over_r0) ** (5 / 3) * (1 - alpha * nu ** (1 / 3))
-    )
+    tilt = 1 - alpha * nu ** (1 / 3)  # in [0, 1]; 0 only at nu = 1 with alpha = 1
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        # (nu D/r0)^(5/3) may overflow to inf (nu D/r0 > 1e185): exp(-inf) = 0 is the MTF to double
+        # precision; where tilt = 0 the exponent is 0 (inf * 0 would be NaN), and the MTF is
+        # diffraction_mtf, 0 at nu = 1
+        exponent = np.where(tilt > 0, (nu * d_over_r0) ** (5 / 3) * tilt, 0.0)
+        return diffraction_mtf(nu) * np.exp(-3.44 * exponent)
 
 
 def fit_r0(nu, measured_mtf, diameter, *, floor: float = 0.02) -> float:

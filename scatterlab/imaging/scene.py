@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from scatterlab._checks import as_count, as_rng
+from scatterlab._checks import as_count, as_finite, as_rng, as_scalar
 from scatterlab.pbrdf import Model
 
 __all__ = ["Scene", "painted_plate", "render_stokes"]
@@ -72,7 +72,7 @@ def painted_plate(
     Parameters
     ----------
     n : int
-        Field size [pixels] (square).
+        Field size [pixels] (square), an integer >= 8.
     metal, paint : complex
         Indices ``n - j kappa``.
     metal_roughness, paint_roughness : float
@@ -84,27 +84,41 @@ def painted_plate(
     zoom : float
         Magnification of the letter template: 1 shows the whole "st" (letter strokes n/13 wide); 2 shows a
         field half as wide, e.g. the right side of the "s" and the left side of the "t" as in Figs. 49-52.
+        A single number in [0.25, 16].
     center : (float, float)
-        Field centre (row, column) in template units (the template is 16 units wide; the "s" spans columns
-        2-7, the "t" 8.5-13.7).
+        Field centre (row, column) in template units, two finite numbers (the template is 16 units wide;
+        the "s" spans columns 2-7, the "t" 8.5-13.7).
     rng : optional
         Seeds the scratches.
 
     Returns
     -------
     Scene
-        Labels 0 paint, 1 bare metal (letters), 2 scratches (bare metal, smoother).
+        Labels 0 paint, 1 bare metal (letters), 2 scratches (bare metal, smoother); ``labels`` of shape
+        ``(n, n)``.
+
+    Raises
+    ------
+    ValueError
+        ``n`` not an integer >= 8, ``zoom`` not a single number in [0.25, 16], ``scratches`` not an integer
+        >= 0, ``center`` not two finite numbers, or a malformed ``rng``.
     """
-    if not (isinstance(n, (int, np.integer)) and n >= 8):
-        raise ValueError(f"n must be an integer >= 8 pixels, got {n!r}")
-    if not (np.isfinite(zoom) and 0.25 <= zoom <= 16):
-        raise ValueError(f"zoom must be in [0.25, 16], got {zoom!r}")
+    n = as_count(n, "n", 8, " [pixels]")
+    zoom = as_scalar(zoom, "zoom", 0.25, 16.0)
     as_count(scratches, "scratches", 0)
+    allowed = f"center must be (row, column), two finite numbers in template units, got {center!r}"
+    try:
+        centre = as_finite(center, "center")
+    except ValueError:
+        raise ValueError(allowed) from None
+    if centre.shape != (2,):
+        raise ValueError(allowed)
+    cy, cx = float(centre[0]), float(centre[1])
     rng = as_rng(rng)
     u = n * zoom / 16  # pixels per template unit
     yy, xx = np.mgrid[0:n, 0:n]
-    ty = (yy + 0.5 - n / 2) / u + float(center[0])
-    tx = (xx + 0.5 - n / 2) / u + float(center[1])
+    ty = (yy + 0.5 - n / 2) / u + cy
+    tx = (xx + 0.5 - n / 2) / u + cx
     lab = np.zeros((n, n), int)
     for r0, r1, c0, c1 in _LETTERS:
         lab[(ty >= r0) & (ty < r1) & (tx >= c0) & (tx < c1)] = 1

@@ -38,7 +38,7 @@ import warnings
 import numpy as np
 from scipy import integrate, special
 
-from scatterlab._checks import as_count, as_finite, as_positive, as_rng
+from scatterlab._checks import as_count, as_finite, as_positive, as_rng, as_scalar
 
 __all__ = [
     "STRUCTURE_CONSTANT",
@@ -289,30 +289,79 @@ def phase_psd(f, r0, L0=np.inf, l0=0.0):
     )
 
 
+def _log_path_integral(cn2, L: float, weight=None, mean_weight: float = 1.0) -> float:
+    """``log int_0^L C_n^2(z) w(z) dz`` [log m^(1/3)], ``w = 1`` without ``weight``.
+
+    A constant ``cn2`` gives ``log cn2 + log L + log mean_weight`` (``mean_weight`` is the mean of ``w``
+    over the path), which never overflows; a profile ``cn2(z)`` is integrated by quadrature, and the
+    integral must be finite and > 0.
+    """
+    if callable(cn2):
+        integrand = cn2 if weight is None else (lambda z: cn2(z) * weight(z))
+        integral = integrate.quad(integrand, 0, L)[0]
+        if not (math.isfinite(integral) and integral > 0):
+            raise ValueError(
+                "cn2 (a profile cn2(z) [m^(-2/3)]) must integrate to a finite positive value over the "
+                f"path [0, {L:g}] m, got {integral!r}"
+            )
+        return math.log(integral)
+    c = as_scalar(cn2, "cn2", 0.0, open_lo=True, unit=" [m^(-2/3)] (or a profile cn2(z))")
+    return math.log(c) + math.log(L) + math.log(mean_weight)
+
+
+def _shown(cn2) -> str:
+    """``cn2`` for a message: the number, or "a profile"."""
+    return "a profile" if callable(cn2) else f"{float(cn2):g} m^(-2/3)"
+
+
+def _exp_or_refuse(log_value: float, message: str) -> float:
+    """``exp(log_value)``: 0.0 where it is below the smallest double (the correct limit), a ValueError with
+    ``message`` where it exceeds the largest."""
+    if log_value > _LOG_MAX:
+        raise ValueError(message)
+    return math.exp(log_value)  # math.exp underflows to 0.0 without an error
+
+
 def fried_parameter(cn2, path_length, wavelength):
-    """Fried parameter r0 [m] (Eqs. 74-75), plane wave.
+    """Fried parameter r0 [m] (Eqs. 74-75), plane wave: ``r0 = (0.423 k^2 int C_n^2 dz)^(-3/5)``.
+
+    Evaluated in logarithms, so no intermediate overflows or underflows: ``k^2`` of a wavelength of 1e200 m
+    is below the smallest double, but ``r0`` is not.
 
     Parameters
     ----------
     cn2 : float or callable
-        Constant C_n^2 [m^(-2/3)], or a profile ``cn2(z)`` integrated over ``[0, path_length]``.
+        Constant C_n^2 [m^(-2/3)], a single finite number > 0, or a profile ``cn2(z)`` [m^(-2/3)]
+        integrated over ``[0, path_length]`` (the integral must be finite and > 0).
     path_length : float
-        Propagation path length [m].
+        Propagation path length [m], a single finite number > 0.
     wavelength : float
-        Wavelength [m].
+        Wavelength [m], a single finite number > 0.
 
     Returns
     -------
     float
-        Fried parameter r0 [m].
+        Fried parameter r0 [m]; 0.0 where it is below the smallest double (extremely strong turbulence,
+        the correct limit).
+
+    Raises
+    ------
+    ValueError
+        An argument out of range (``None`` and strings included), or an ``r0`` beyond the largest double
+        (1.8e308 m: extremely weak turbulence or a huge wavelength, e.g. ``cn2 = 1e-14``, ``L = 1e3``,
+        ``wavelength = 1e270``).
     """
-    L = float(as_positive(path_length, "path_length"))
-    lam = float(as_positive(wavelength, "wavelength"))
-    integral = integrate.quad(cn2, 0, L)[0] if callable(cn2) else float(as_positive(cn2, "cn2")) * L
-    if integral <= 0:
-        raise ValueError("cn2 must integrate to a positive value over the path")
-    k = 2 * np.pi / lam
-    return (0.423 * k * k * integral) ** (-3 / 5)
+    L = as_scalar(path_length, "path_length", 0.0, open_lo=True, unit=" [m]")
+    lam = as_scalar(wavelength, "wavelength", 0.0, open_lo=True, unit=" [m]")
+    log_c = _log_path_integral(cn2, L)
+    # log r0 = -3/5 [log 0.423 + 2 log(2 pi) - 2 log(lambda) + log int C_n^2 dz]
+    log_r0 = -0.6 * (math.log(0.423) + 2 * math.log(2 * math.pi) - 2 * math.log(lam) + log_c)
+    return _exp_or_refuse(
+        log_r0,
+        f"r0 exceeds the largest double (1.8e308 m) for cn2 = {_shown(cn2)}, path_length = {L:g} m and "
+        f"wavelength = {lam:g} m: the turbulence is too weak (cn2 * path_length too small) or the "
+        "wavelength too long",
+    )
 
 
 def _weak_check(s2):
@@ -329,50 +378,82 @@ def _weak_check(s2):
 def rytov_variance(cn2, path_length, wavelength):
     """Plane-wave Rytov variance (Eq. 80); warns when >= 0.2 (strong turbulence).
 
+    ``sigma_R^2 = 2.25 k^(7/6) L^(5/6) int_0^L C_n^2(z) (1 - z/L)^(5/6) dz``, i.e. ``1.23 C_n^2 k^(7/6)
+    L^(11/6)`` for a constant C_n^2; evaluated in logarithms (``k^(7/6)`` of a wavelength of 1e-300 m
+    overflows, the variance may not).
+
     Parameters
     ----------
     cn2 : float or callable
-        Constant C_n^2 [m^(-2/3)], or a profile ``cn2(z)`` [m^(-2/3)] of the distance ``z`` [m].
+        Constant C_n^2 [m^(-2/3)], a single finite number > 0, or a profile ``cn2(z)`` [m^(-2/3)] of the
+        distance ``z`` [m] (its weighted integral must be finite and > 0).
     path_length : float
-        Propagation path length [m].
+        Propagation path length [m], a single finite number > 0.
     wavelength : float
-        Wavelength [m].
+        Wavelength [m], a single finite number > 0.
 
     Returns
     -------
     float
-        Rytov variance [dimensionless].
+        Rytov variance [dimensionless]; 0.0 where it is below the smallest double (the correct limit).
+
+    Raises
+    ------
+    ValueError
+        An argument out of range (``None`` and strings included), or a variance beyond the largest double
+        (1.8e308, e.g. ``wavelength = 1e-300`` m): the weak-fluctuation theory is meaningless long before.
     """
-    L = float(as_positive(path_length, "path_length"))
-    k = 2 * np.pi / float(as_positive(wavelength, "wavelength"))
-    if callable(cn2):
-        integral = integrate.quad(lambda z: cn2(z) * (1 - z / L) ** (5 / 6), 0, L)[0]
-    else:
-        integral = float(as_positive(cn2, "cn2")) * L * 6 / 11
-    return _weak_check(2.25 * k ** (7 / 6) * L ** (5 / 6) * integral)
+    L = as_scalar(path_length, "path_length", 0.0, open_lo=True, unit=" [m]")
+    lam = as_scalar(wavelength, "wavelength", 0.0, open_lo=True, unit=" [m]")
+    # the weight (1 - z/L)^(5/6) has the mean 6/11 over the path
+    log_c = _log_path_integral(cn2, L, lambda z: (1 - z / L) ** (5 / 6), 6 / 11)
+    log_k = math.log(2 * math.pi) - math.log(lam)
+    log_s2 = math.log(2.25) + 7 / 6 * log_k + 5 / 6 * math.log(L) + log_c
+    s2 = _exp_or_refuse(
+        log_s2,
+        f"the Rytov variance exceeds the largest double (1.8e308) for cn2 = {_shown(cn2)}, path_length = "
+        f"{L:g} m and wavelength = {lam:g} m: the wavelength is too short, or cn2 or path_length too "
+        "large",
+    )
+    return _weak_check(s2)
 
 
 def rytov_variance_from_r0(r0, path_length, wavelength):
     """Eq. 81: 2.91 [L / (k r0^2)]^(5/6) for constant C_n^2; warns when >= 0.2.
 
+    Evaluated in logarithms (``r0^2`` of r0 = 1e-300 m underflows, the variance may not).
+
     Parameters
     ----------
     r0 : float
-        Fried parameter [m].
+        Fried parameter [m], a single finite number > 0.
     path_length : float
-        Propagation path length [m].
+        Propagation path length [m], a single finite number > 0.
     wavelength : float
-        Wavelength [m].
+        Wavelength [m], a single finite number > 0.
 
     Returns
     -------
     float
-        Rytov variance [dimensionless].
+        Rytov variance [dimensionless]; 0.0 where it is below the smallest double (the correct limit).
+
+    Raises
+    ------
+    ValueError
+        An argument out of range (``None`` and strings included), or a variance beyond the largest double
+        (1.8e308, e.g. ``r0 = 1e-300`` m with ``wavelength = 1e-300`` m).
     """
-    r0 = float(as_positive(r0, "r0"))
-    L = float(as_positive(path_length, "path_length"))
-    k = 2 * np.pi / float(as_positive(wavelength, "wavelength"))
-    return _weak_check(2.91 * (L / (k * r0 * r0)) ** (5 / 6))
+    r0 = as_scalar(r0, "r0", 0.0, open_lo=True, unit=" [m]")
+    L = as_scalar(path_length, "path_length", 0.0, open_lo=True, unit=" [m]")
+    lam = as_scalar(wavelength, "wavelength", 0.0, open_lo=True, unit=" [m]")
+    log_k = math.log(2 * math.pi) - math.log(lam)
+    log_s2 = math.log(2.91) + 5 / 6 * (math.log(L) - log_k - 2 * math.log(r0))
+    s2 = _exp_or_refuse(
+        log_s2,
+        f"the Rytov variance exceeds the largest double (1.8e308) for r0 = {r0:g} m, path_length = "
+        f"{L:g} m and wavelength = {lam:g} m: r0 is too small, or path_length or wavelength too large",
+    )
+    return _weak_check(s2)
 
 
 MAX_D_OVER_R0 = 1e6  # a screen width over r0 beyond this has phase differences no grid samples
@@ -738,12 +819,15 @@ def structure_function(screens, max_separation: int) -> tuple[np.ndarray, np.nda
     r : ndarray of int, shape (max_separation,)
         Separations 1..max_separation [pixels].
     D : ndarray, shape (max_separation,)
-        Structure function [rad^2], averaged over the two axes and all screens.
+        Structure function [rad^2], averaged over the two axes and all screens. Computed on the screens
+        scaled by a power of two to ``|phase| <= 1`` (exact), so phases of any magnitude are handled; 0
+        where it is below the smallest double.
 
     Raises
     ------
     ValueError
-        ``screens`` not finite or not at least 2-D, or ``max_separation`` out of range.
+        ``screens`` not finite or not at least 2-D, ``max_separation`` out of range, or a structure
+        function beyond the largest double (phase differences above ~1e154 rad).
     """
     s = as_finite(screens, "screens")
     if s.ndim < 2 or min(s.shape[-2:]) < 2:
@@ -758,6 +842,10 @@ def structure_function(screens, max_separation: int) -> tuple[np.ndarray, np.nda
             f"a separation of {k_max} has no pixel pairs), got {max_separation!r}"
         )
     seps = np.arange(1, k_max + 1)
+    # scaled by a power of two to |phase| <= 1 (exact): the differences and their squares cannot overflow
+    # (phases of 1e300 rad), and the result is scaled back exactly unless it leaves the double range
+    exponent = math.frexp(float(np.max(np.abs(s), initial=0.0)))[1]
+    s = np.ldexp(s, -exponent)
     D = np.array(
         [
             0.5
@@ -768,6 +856,15 @@ def structure_function(screens, max_separation: int) -> tuple[np.ndarray, np.nda
             for k in seps
         ]
     )
+    with np.errstate(over="ignore", under="ignore"):
+        D = np.ldexp(
+            D, 2 * exponent
+        )  # underflows to 0 for phases below ~1e-154 rad: the correct limit
+    if not np.all(np.isfinite(D)):
+        raise ValueError(
+            "screens must have phase differences below ~1e154 rad: the structure function then "
+            "exceeds the largest double (1.8e308 rad^2)"
+        )
     return seps, D
 
 
